@@ -1,0 +1,16 @@
+"""Explicit RK/RKMK integrators on any problem plugin (method.md section 2)."""
+
+from .api import integrate
+from .drivers import MAX_INCREMENT_ANGLE, initial_step, integrate_adaptive, integrate_fixed
+from .methods import METHODS, is_adaptive, resolve_method
+from .observers import DiagnosticsRecorder, Observers, StateRecorder
+from .problem import GroupProblem, Problem
+from .result import BlowUpError, IntegrationError, Solution, Stats, StepSizeError
+from .rkmk import combine, compute_stages, error_estimate, error_norm, rkmk_step
+
+__all__ = [
+    "integrate", "integrate_fixed", "integrate_adaptive", "initial_step", "MAX_INCREMENT_ANGLE",
+    "METHODS", "resolve_method", "is_adaptive", "StateRecorder", "DiagnosticsRecorder", "Observers",
+    "Problem", "GroupProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
+    "combine", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
+]

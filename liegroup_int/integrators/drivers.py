@@ -1,0 +1,228 @@
+"""Fixed-step and adaptive drivers around :func:`rkmk_step`.
+
+Both drivers are plain functions of ``(problem, tableau, t_span, y0, ...)``; they call
+the observer at ``t0``, at every output time and at the final time, and an optional
+``monitor(t, y, stats)`` after every accepted step (progress bars, checkpoints).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from ..tableaux import ButcherTableau
+from .problem import Problem
+from .result import BlowUpError, Stats, StepSizeError
+from .rkmk import error_estimate, error_norm, rkmk_step
+
+#: Default bound on the rotation angle of one step's increment [rad]. The closed-form
+#: dexpinv of SO(3) has its pole at 2 pi; 1 rad keeps every stage far from it.
+MAX_INCREMENT_ANGLE = 1.0
+
+
+def _output_times(t0: float, t_end: float, t_out) -> np.ndarray:
+    if t_out is None:
+        return np.array([t_end])
+    t_out = np.asarray(t_out, dtype=float).ravel()
+    if np.any(np.diff(t_out) < 0) or (t_out.size and (t_out[0] < t0 or t_out[-1] > t_end)):
+        raise ValueError(f"output times must be sorted and inside [{t0}, {t_end}]")
+    t_out = t_out[t_out > t0]
+    if t_out.size == 0 or t_out[-1] < t_end:
+        t_out = np.append(t_out, t_end)
+    return t_out
+
+
+def _workspace(problem: Problem, tab: ButcherTableau, y0) -> np.ndarray:
+    z = problem.zero_increment(y0)
+    return np.zeros((tab.stages,) + z.shape)
+
+
+def _check_finite(problem: Problem, u: np.ndarray, t: float, step: int) -> None:
+    if not np.all(np.isfinite(u)):
+        raise BlowUpError(f"non-finite state at t={t:.6g} (step {step}); the step is beyond the stability limit", t, step)
+
+
+def integrate_fixed(
+    problem: Problem,
+    tab: ButcherTableau,
+    t_span: tuple[float, float],
+    y0,
+    dt: float,
+    observer: Callable | None = None,
+    t_out=None,
+    monitor: Callable | None = None,
+    max_increment_angle: float = MAX_INCREMENT_ANGLE,
+    stats: Stats | None = None,
+):
+    """Integrate with constant step ``dt`` (shortened only to land on output times).
+
+    Parameters
+    ----------
+    problem : Problem
+    tab : ButcherTableau
+    t_span : (float, float)
+        ``(t0, t_end)`` with ``t_end > t0``.
+    y0 : state
+    dt : float
+        Step size, ``0 < dt``.
+    observer : callable, optional
+        ``observer(t, y)`` called at ``t0`` and at every output time.
+    t_out : array_like, optional
+        Output times in ``(t0, t_end]``; ``t_end`` is always one.
+    monitor : callable, optional
+        ``monitor(t, y, stats)`` after every step.
+    max_increment_angle : float
+        A step whose rotational increment exceeds this angle raises
+        :class:`StepSizeError` (dt too large for the rotation rate).
+    stats : Stats, optional
+        Counters to continue (resumed runs); a new one otherwise.
+
+    Returns
+    -------
+    (t_end, y_end, stats)
+    """
+    t0, t_end = float(t_span[0]), float(t_span[1])
+    if not dt > 0:
+        raise ValueError(f"dt must be positive, got {dt!r}")
+    stops = _output_times(t0, t_end, t_out)
+    stats = stats if stats is not None else Stats()
+    K = _workspace(problem, tab, y0)
+    t, y = t0, y0
+    if observer is not None:
+        observer(t, y)
+    start = time.perf_counter()
+    for stop in stops:
+        # steps of dt from the last stop; the last one lands exactly on ``stop``
+        n = max(1, int(np.ceil((stop - t) / dt - 1e-9)))
+        t_start = t
+        for i in range(n):
+            t_next = stop if i == n - 1 else t_start + (i + 1) * dt
+            h = t_next - t
+            y, u = rkmk_step(problem, tab, t, y, h, K)
+            stats.rhs_evals += tab.stages
+            _check_finite(problem, u, t_next, stats.steps + 1)
+            angle = problem.rotation_angle(u)
+            if angle > max_increment_angle:
+                raise StepSizeError(
+                    f"rotation increment {angle:.3g} rad at t={t_next:.6g} exceeds {max_increment_angle:.3g} rad; reduce dt",
+                    t_next,
+                    stats.steps + 1,
+                )
+            t = t_next
+            stats.accept(h)
+            if monitor is not None:
+                monitor(t, y, stats)
+        if observer is not None:
+            observer(t, y)
+    stats.wall_time_s += time.perf_counter() - start
+    return t, y, stats
+
+
+def initial_step(problem: Problem, tab: ButcherTableau, t0: float, y0, t_end: float, rtol: float, atol: float) -> float:
+    """Starting step size (Hairer-Norsett-Wanner I, II.4, algorithm of eq. 4.14)."""
+    order = min(tab.order, tab.order_hat if tab.order_hat is not None else tab.order)
+    z = problem.zero_increment(y0)
+    scale = atol + rtol * problem.increment_scale(y0)
+    f0 = problem.increment_rate(t0, y0, z)
+    d0 = float(np.sqrt(np.mean((problem.increment_scale(y0) / scale) ** 2)))
+    d1 = float(np.sqrt(np.mean((f0 / scale) ** 2)))
+    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0 = min(h0, t_end - t0)
+    y1 = problem.action(h0 * f0, y0)
+    f1 = problem.increment_rate(t0 + h0, y1, h0 * f0)
+    d2 = float(np.sqrt(np.mean(((f1 - f0) / scale) ** 2))) / h0
+    if max(d1, d2) <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
+    return min(100 * h0, h1, t_end - t0)
+
+
+def integrate_adaptive(
+    problem: Problem,
+    tab: ButcherTableau,
+    t_span: tuple[float, float],
+    y0,
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    observer: Callable | None = None,
+    t_out=None,
+    monitor: Callable | None = None,
+    h0: float | None = None,
+    h_max: float = np.inf,
+    max_steps: int = 10_000_000,
+    max_increment_angle: float = MAX_INCREMENT_ANGLE,
+    safety: float = 0.9,
+    fac_min: float = 0.2,
+    fac_max: float = 5.0,
+    stats: Stats | None = None,
+):
+    """Integrate with an embedded pair and PI step-size control.
+
+    The local error ``h sum (b - b_hat) k`` is measured in the increment space with
+    the RMS norm of ``err / (atol + rtol * scale)``. The controller is the PI law
+    ``h_new = h * safety * err^(-0.7/k) * err_prev^(0.4/k)`` with ``k = min(order,
+    order_hat) + 1`` (Hairer-Wanner II, IV.2); rejected steps shrink by
+    ``safety * err^(-1/k)``. Steps whose rotational increment exceeds
+    ``max_increment_angle`` are rejected too (they would approach the 2 pi pole of
+    dexpinv). Output times are hit exactly by shortening steps.
+
+    Returns
+    -------
+    (t_end, y_end, stats)
+    """
+    if tab.b_hat_f is None:
+        raise ValueError(f"method {tab.name!r} has no embedded pair; give a fixed dt instead of rtol/atol")
+    if not (rtol > 0 and atol > 0):
+        raise ValueError(f"rtol and atol must be positive, got rtol={rtol!r}, atol={atol!r}")
+    t0, t_end = float(t_span[0]), float(t_span[1])
+    stops = _output_times(t0, t_end, t_out)
+    stats = stats if stats is not None else Stats()
+    K = _workspace(problem, tab, y0)
+    k = min(tab.order, tab.order_hat) + 1
+    beta1, beta2 = 0.7 / k, 0.4 / k
+    t, y = t0, y0
+    h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
+    err_prev = 1e-4
+    if observer is not None:
+        observer(t, y)
+    start = time.perf_counter()
+    i_stop = 0
+    while i_stop < len(stops):
+        stop = stops[i_stop]
+        if stats.steps >= max_steps:
+            raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
+        land = t + h >= stop - 1e-12 * max(1.0, abs(stop))
+        h_try = stop - t if land else h
+        y_new, u = rkmk_step(problem, tab, t, y, h_try, K)
+        stats.rhs_evals += tab.stages
+        err = error_norm(error_estimate(tab, K, h_try),
+                         np.maximum(problem.increment_scale(y), problem.increment_scale(y_new)), rtol, atol)
+        angle = problem.rotation_angle(u)
+        if not np.isfinite(err):
+            err = np.inf
+        if err <= 1.0 and angle <= max_increment_angle:
+            t = stop if land else t + h_try
+            y = y_new
+            stats.accept(h_try)
+            fac = safety * err ** (-beta1) * err_prev**beta2 if err > 0 else fac_max
+            h = min(h_max, h_try * min(fac_max, max(fac_min, fac)))
+            err_prev = max(err, 1e-4)
+            if monitor is not None:
+                monitor(t, y, stats)
+            if land:
+                if observer is not None:
+                    observer(t, y)
+                i_stop += 1
+        else:
+            stats.rejected += 1
+            fac = safety * err ** (-1.0 / k) if np.isfinite(err) else fac_min
+            if angle > max_increment_angle:
+                fac = min(fac, 0.5 * max_increment_angle / angle)
+            h = h_try * min(1.0, max(fac_min, fac))
+            if h < 1e-14 * max(1.0, abs(t)):
+                raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
+    stats.wall_time_s += time.perf_counter() - start
+    return t, y, stats

@@ -1,0 +1,102 @@
+"""The RKMK plugin contract (method.md section 2, homogeneous-space form).
+
+A problem supplies
+
+* a linear space of increments (ndarrays of a fixed shape, combined linearly),
+* an action ``Lambda(u, y_n) -> y``,
+* ``dexpinv_u(w)``, and
+* a vector field ``f(t, y)`` with values in the increment space.
+
+One explicit RKMK stage then needs ``k_r = dexpinv_{u_r}(f(t_r, Lambda(u_r, y_n)))``,
+which :meth:`Problem.increment_rate` returns. Problems whose ``dexpinv`` is best fused
+with the vector field (the beam: pointwise dexpinv before the collocation solve)
+override :meth:`increment_rate` directly. On R^n, ``Lambda(u, y) = y + u`` and
+``dexpinv = id``, so RKMK is classical RK.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Callable
+
+import numpy as np
+
+from ..groups import LieGroup
+
+
+class Problem(ABC):
+    """Abstract RKMK problem. States ``y`` may be any object; increments are ndarrays."""
+
+    @abstractmethod
+    def action(self, u: np.ndarray, y):
+        """``Lambda(u, y)``: the state reached from ``y`` by the increment ``u``."""
+
+    @abstractmethod
+    def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """``dexpinv_u(w)`` in the increment space."""
+
+    @abstractmethod
+    def vector_field(self, t: float, y) -> np.ndarray:
+        """``f(t, y)``, an element of the increment space."""
+
+    @abstractmethod
+    def zero_increment(self, y) -> np.ndarray:
+        """The zero increment at ``y`` (fixes the increment shape)."""
+
+    def increment_rate(self, t: float, y, u: np.ndarray) -> np.ndarray:
+        """``dexpinv_u(f(t, y))`` where ``y = Lambda(u, y_n)``."""
+        return self.dexpinv(u, self.vector_field(t, y))
+
+    def increment_scale(self, y) -> np.ndarray:
+        """Typical size of each increment component at ``y``, for error norms.
+
+        Defaults to ones (increments measured in absolute terms).
+        """
+        return np.ones_like(self.zero_increment(y))
+
+    def rotation_angle(self, u: np.ndarray) -> float:
+        """Largest rotation angle carried by the increment ``u`` (0 if none)."""
+        return 0.0
+
+    def is_finite(self, y) -> bool:
+        """Whether the state holds only finite numbers."""
+        return bool(np.all(np.isfinite(y)))
+
+
+class GroupProblem(Problem):
+    """An ODE ``dy/dt = f(t, y) y`` on a Lie group, with left increments.
+
+    Parameters
+    ----------
+    space : LieGroup
+        The group ``y`` lives on (``Rn``, ``SO3``, ``SE3``, ``Product``, ``Power``).
+    f : callable
+        ``f(t, y) -> xi`` with ``xi`` of shape ``(..., space.dim)``: the *spatial*
+        (right-trivialized) velocity, ``dy/dt = hat(xi) y`` for matrix groups, and
+        ``dy/dt = xi`` on R^n.
+    """
+
+    def __init__(self, space: LieGroup, f: Callable[[float, np.ndarray], np.ndarray]):
+        if not isinstance(space, LieGroup):
+            raise TypeError(f"GroupProblem: space must be a LieGroup, got {space!r}")
+        self.space = space
+        self.f = f
+
+    def action(self, u, y):
+        return self.space.retract(u, y)
+
+    def dexpinv(self, u, w):
+        return self.space.dexpinv(u, w)
+
+    def vector_field(self, t, y):
+        return np.asarray(self.f(t, y), dtype=float)
+
+    def zero_increment(self, y):
+        k = len(self.space.point_shape)
+        return np.zeros(np.shape(y)[: np.ndim(y) - k] + (self.space.dim,))
+
+    def increment_scale(self, y):
+        return self.space.magnitude(y)
+
+    def rotation_angle(self, u):
+        return float(np.max(self.space.rotation_angle(u), initial=0.0))

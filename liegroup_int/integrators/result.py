@@ -1,0 +1,97 @@
+"""Run statistics, results and the errors integrators raise."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Stats:
+    """Counters of one integration.
+
+    Attributes
+    ----------
+    steps : int
+        Accepted steps.
+    rejected : int
+        Rejected steps (adaptive drivers only).
+    rhs_evals : int
+        Evaluations of the increment rate (one per stage, rejected steps included).
+    wall_time_s : float
+        Wall-clock time of the integration loop.
+    h_min, h_max : float
+        Smallest and largest accepted step.
+    """
+
+    steps: int = 0
+    rejected: int = 0
+    rhs_evals: int = 0
+    wall_time_s: float = 0.0
+    h_min: float = np.inf
+    h_max: float = 0.0
+
+    def accept(self, h: float) -> None:
+        self.steps += 1
+        self.h_min = min(self.h_min, h)
+        self.h_max = max(self.h_max, h)
+
+    def as_dict(self) -> dict:
+        return {
+            "steps": self.steps,
+            "rejected": self.rejected,
+            "rhs_evals": self.rhs_evals,
+            "wall_time_s": self.wall_time_s,
+            "h_min": float(self.h_min) if self.steps else None,
+            "h_max": float(self.h_max) if self.steps else None,
+        }
+
+
+@dataclass
+class Solution:
+    """Result of :func:`liegroup_int.integrate`.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n_out,)
+        Output times.
+    y : list
+        States at the output times (as recorded by the observer; empty if the caller
+        passed an observer that keeps its own records).
+    t_final : float
+        Time reached.
+    y_final : object
+        State at ``t_final``.
+    stats : Stats
+    method : str
+        Name of the tableau used.
+    """
+
+    t: np.ndarray
+    y: list
+    t_final: float
+    y_final: object
+    stats: Stats
+    method: str
+    observer: object = field(default=None, repr=False)
+
+
+class IntegrationError(RuntimeError):
+    """An integration stopped early; ``t`` and ``step`` say where.
+
+    Everything recorded before the failure stays in the observer.
+    """
+
+    def __init__(self, message: str, t: float, step: int):
+        super().__init__(message)
+        self.t = t
+        self.step = step
+
+
+class BlowUpError(IntegrationError):
+    """The state became non-finite (or a problem-specific blow-up check fired)."""
+
+
+class StepSizeError(IntegrationError):
+    """The step cannot satisfy the tolerance or the rotation guard."""

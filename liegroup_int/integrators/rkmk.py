@@ -1,0 +1,53 @@
+"""One explicit RKMK step as small pure functions (method.md section 2).
+
+::
+
+    u_r     = h * sum_l A[r, l] k_l
+    y_r     = Lambda(u_r, y_n)
+    k_r     = dexpinv_{u_r}(f(t_n + c_r h, y_r))
+    y_{n+1} = Lambda(h * sum_r b_r k_r, y_n)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..tableaux import ButcherTableau
+from .problem import Problem
+
+
+def combine(weights: np.ndarray, K: np.ndarray, h: float) -> np.ndarray:
+    """``h * sum_l weights[l] * K[l]`` for ``K`` of shape ``(s, *increment_shape)``."""
+    n = weights.shape[0]
+    return h * np.tensordot(weights, K[:n], axes=1)
+
+
+def compute_stages(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray) -> None:
+    """Fill ``K[r] = dexpinv_{u_r}(f(t + c_r h, Lambda(u_r, y)))`` for every stage ``r``."""
+    A, c = tab.A_f, tab.c_f
+    K[0] = problem.increment_rate(t, y, np.zeros_like(K[0]))
+    for r in range(1, tab.stages):
+        u = combine(A[r, :r], K, h)
+        K[r] = problem.increment_rate(t + c[r] * h, problem.action(u, y), u)
+
+
+def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray):
+    """One RKMK step from ``(t, y)``; returns ``(y_new, u)`` with ``u`` the total increment.
+
+    ``K`` is a work array of shape ``(stages, *increment_shape)``; on return it holds
+    the stage rates, from which :func:`error_estimate` forms the embedded error.
+    """
+    compute_stages(problem, tab, t, y, h, K)
+    u = combine(tab.b_f, K, h)
+    return problem.action(u, y), u
+
+
+def error_estimate(tab: ButcherTableau, K: np.ndarray, h: float) -> np.ndarray:
+    """Embedded error ``h * sum_r (b_r - b_hat_r) k_r`` in the increment space."""
+    return combine(tab.b_f - tab.b_hat_f, K, h)
+
+
+def error_norm(err: np.ndarray, scale: np.ndarray, rtol: float, atol: float) -> float:
+    """RMS norm of ``err / (atol + rtol * scale)`` (Hairer-Norsett-Wanner II.4)."""
+    w = err / (atol + rtol * scale)
+    return float(np.sqrt(np.mean(w * w)))
