@@ -30,6 +30,16 @@ def vee(m: np.ndarray) -> np.ndarray:
     )
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis, ``(..., 3) x (..., 3) -> (..., 3)``.
+
+    Same result as ``np.cross`` without its axis bookkeeping (faster on small batches).
+    """
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+
+
 def angle(xi: np.ndarray) -> np.ndarray:
     """Rotation angle ``|xi|``, shape ``(...)``."""
     return np.sqrt(np.einsum("...i,...i->...", xi, xi))
@@ -86,15 +96,15 @@ def log_so3(R: np.ndarray) -> np.ndarray:
 def dexp_so3(xi: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Left Jacobian applied to ``v``: ``v + B xi x v + C xi x (xi x v)``."""
     t = angle(xi)
-    xv = np.cross(xi, v)
-    return v + coeff_B(t)[..., None] * xv + coeff_C(t)[..., None] * np.cross(xi, xv)
+    xv = cross(xi, v)
+    return v + coeff_B(t)[..., None] * xv + coeff_C(t)[..., None] * cross(xi, xv)
 
 
 def dexpinv_so3(xi: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Inverse left Jacobian applied to ``v``: ``v - xi x v / 2 + D xi x (xi x v)``."""
     t = angle(xi)
-    xv = np.cross(xi, v)
-    return v - 0.5 * xv + coeff_D(t)[..., None] * np.cross(xi, xv)
+    xv = cross(xi, v)
+    return v - 0.5 * xv + coeff_D(t)[..., None] * cross(xi, xv)
 
 
 def left_jacobian(xi: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..groups import SO3, Product, Rn
+from ..groups.so3 import cross
 from ..integrators import GroupProblem
 
 SPACE = Product(SO3, Rn(3))
@@ -85,10 +86,10 @@ class RigidBody:
         """``(R W, dW/dt)``, shape ``(..., 6)``."""
         R, W = SPACE.split(y)
         I = self._I
-        torque = np.cross(I * W, W)
+        torque = cross(I * W, W)
         if self.mass > 0:
             gamma = R[..., 2, :]  # R^T e3
-            torque = torque + np.cross(gamma, self._mgchi)
+            torque = torque + cross(gamma, self._mgchi)
         omega = np.einsum("...ij,...j->...i", R, W)
         return np.concatenate((omega, torque / I), axis=-1)
 
