@@ -1,0 +1,70 @@
+"""Command line: ``liegroup-int run|scenes ...``.
+
+Errors in scenes or arguments print one line ``error: ...`` and exit with code 2; a run
+that stops early (blow-up) exits with code 3 after saving what it computed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .scenes import SceneError, builtin_descriptions, load_scene, parse_override
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="liegroup-int", description="Explicit RKMK integration on Lie groups: rigid bodies and beams.")
+    p.add_argument("--version", action="version", version=f"%(prog)s {__import__('liegroup_int').__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run a scene (a TOML path or a built-in name)")
+    run.add_argument("scene", help="scene file or built-in scene name (see `liegroup-int scenes`)")
+    run.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE)")
+    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scene key, e.g. --set integrator.dt=1e-4 (repeatable)")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    val = sub.add_parser("validate", help="check a scene without running it")
+    val.add_argument("scene")
+    val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    sub.add_parser("scenes", help="list the built-in scenes")
+    return p
+
+
+class _ArgParser(argparse.ArgumentParser):
+    pass
+
+
+def _load(args):
+    overrides = dict(parse_override(s) for s in args.overrides)
+    return load_scene(args.scene, overrides)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "scenes":
+            for name, desc in builtin_descriptions().items():
+                print(f"{name:24s} {desc}")
+            return 0
+        if args.command == "validate":
+            scene = _load(args)
+            print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
+            return 0
+        if args.command == "run":
+            from .runner import RunError, run_scene
+
+            scene = _load(args)
+            out = args.out if args.out is not None else Path("runs") / scene.name
+            try:
+                res = run_scene(scene, out, quiet=args.quiet)
+            except RunError as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 3
+            s = res.summary
+            print(f"{scene.name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
+            return 0
+    except SceneError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0

@@ -1,0 +1,6 @@
+"""Results on disk: streamed CSV histories, JSON summaries, plots."""
+
+from .history import HistoryWriter, read_history
+from .summary import write_json
+
+__all__ = ["HistoryWriter", "read_history", "write_json"]

@@ -1,0 +1,186 @@
+"""Scenes as frozen dataclasses, loaded from TOML with overrides and validated up front."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Callable, Mapping
+
+from ..integrators import METHODS, resolve_method
+from .schema import REQUIRED, Key, SceneError, flatten, non_negative, positive, read_toml, resolve_keys
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    """``[integrator]``: method and either a fixed ``dt`` (number or ``"auto"``) or tolerances."""
+
+    method: str
+    dt: float | str | None
+    rtol: float | None
+    atol: float | None
+
+    @property
+    def adaptive(self) -> bool:
+        return self.dt is None
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """``[output]``: record interval in simulated seconds and the recorded quantities."""
+
+    every: float | None
+    quantities: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene.
+
+    Attributes
+    ----------
+    name : str
+    kind : str
+        Problem kind (a key of ``KINDS``).
+    source : str
+        File path or ``builtin:NAME``, used in error messages.
+    t_end : float
+    integrator : IntegratorSpec
+    output : OutputSpec
+    params : mapping
+        The problem kind's own keys (read-only), by dotted name.
+    raw : mapping
+        All given keys after overrides, for metadata.
+    """
+
+    name: str
+    kind: str
+    source: str
+    description: str
+    t_end: float
+    integrator: IntegratorSpec
+    output: OutputSpec
+    params: Mapping[str, Any] = field(repr=False)
+    raw: Mapping[str, Any] = field(repr=False)
+
+    def __getitem__(self, key: str):
+        return self.params[key]
+
+
+@dataclass
+class Simulation:
+    """What a problem kind builds from a scene: everything the runner needs.
+
+    Attributes
+    ----------
+    problem : Problem
+    y0 : state
+    diagnostics : dict of str to callable
+        ``name -> fn(t, y)`` for the recorded quantities only.
+    final_state : callable
+        ``fn(y) -> dict`` of named, JSON-ready fields.
+    info : dict
+        Extra JSON-ready facts for summary.json (discretization, stable step, ...).
+    """
+
+    problem: Any
+    y0: Any
+    diagnostics: dict[str, Callable]
+    final_state: Callable[[Any], dict]
+    info: dict = field(default_factory=dict)
+    snapshot: Callable[[Any], dict] | None = None
+
+
+@dataclass(frozen=True)
+class ProblemKind:
+    """A problem plugin as scenes see it: its keys, its quantities and a builder."""
+
+    name: str
+    keys: Mapping[str, Key]
+    quantities: tuple[str, ...]
+    default_quantities: tuple[str, ...]
+    build: Callable[[Scene], Simulation]
+    check: Callable[[Scene], None] | None = None
+
+
+def common_keys(kind: ProblemKind) -> dict[str, Key]:
+    method_names = tuple(sorted(METHODS))
+    keys = [
+        Key("name", "str", "", "scene name (defaults to the file name)"),
+        Key("description", "str", "", "one line shown by `liegroup-int scenes`"),
+        Key("problem", "str", REQUIRED, "problem kind", choices=tuple(sorted(KINDS))),
+        Key("t_end", "float", REQUIRED, "simulated time span", "s", positive),
+        Key("integrator.method", "str", "rkmk4", "RKMK method", choices=method_names),
+        Key("integrator.dt", "float_or_auto", None, 'fixed step, or "auto" (beam scenes)', "s", positive),
+        Key("integrator.rtol", "float", None, "relative tolerance (adaptive pairs)", "", positive),
+        Key("integrator.atol", "float", None, "absolute tolerance (adaptive pairs)", "", positive),
+        Key("output.every", "float", None, "simulated time between recorded rows (default t_end/200)", "s", positive),
+        Key("output.quantities", "strs", kind.default_quantities, "recorded quantities", choices=kind.quantities),
+    ]
+    return {k.name: k for k in keys}
+
+
+KINDS: dict[str, ProblemKind] = {}
+
+
+def register_kind(kind: ProblemKind) -> ProblemKind:
+    KINDS[kind.name] = kind
+    return kind
+
+
+def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Scene:
+    """Validate flat ``given`` keys into a :class:`Scene` (raises :class:`SceneError`)."""
+    kind_name = given.get("problem")
+    if kind_name not in KINDS:
+        valid = ", ".join(sorted(KINDS))
+        raise SceneError(f"{source}: key 'problem' = {kind_name!r}: expected one of {valid}")
+    kind = KINDS[kind_name]
+    keys = {**common_keys(kind), **kind.keys}
+    v = resolve_keys(keys, given, source)
+    method = resolve_method(v["integrator.method"])
+    dt, rtol, atol = v["integrator.dt"], v["integrator.rtol"], v["integrator.atol"]
+    if dt is None and rtol is None and atol is None:
+        raise SceneError(f"{source}: key 'integrator.dt' is missing: give a step (or rtol/atol for an adaptive pair)")
+    if dt is not None and (rtol is not None or atol is not None):
+        raise SceneError(f"{source}: keys 'integrator.dt' and 'integrator.rtol/atol' both given: choose fixed or adaptive stepping")
+    if dt is None and method.b_hat is None:
+        raise SceneError(
+            f"{source}: key 'integrator.method' = {v['integrator.method']!r} has no embedded pair: "
+            "adaptive stepping (rtol/atol) needs rkmk32, rkmk45 or rkmk65"
+        )
+    if isinstance(dt, float) and dt > v["t_end"]:
+        raise SceneError(f"{source}: key 'integrator.dt' = {dt!r}: expected a step <= t_end = {v['t_end']!r}")
+    every = v["output.every"]
+    if every is not None and every > v["t_end"]:
+        raise SceneError(f"{source}: key 'output.every' = {every!r}: expected <= t_end = {v['t_end']!r}")
+    params = {k: v[k] for k in kind.keys}
+    scene = Scene(
+        name=v["name"] or default_name,
+        kind=kind.name,
+        source=source,
+        description=v["description"],
+        t_end=v["t_end"],
+        integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
+        output=OutputSpec(every, v["output.quantities"]),
+        params=MappingProxyType(params),
+        raw=MappingProxyType(dict(given)),
+    )
+    if kind.check is not None:
+        kind.check(scene)
+    return scene
+
+
+def load_scene(path_or_name: "str | Path", overrides: Mapping[str, Any] | None = None) -> Scene:
+    """Load a scene file (or a built-in by name), apply dotted overrides and validate."""
+    from .registry import builtin_path
+
+    p = Path(path_or_name)
+    if p.suffix == ".toml" or p.exists():
+        source, default_name = str(p), p.stem
+    else:
+        p = builtin_path(str(path_or_name))
+        source, default_name = f"builtin:{path_or_name}", str(path_or_name)
+    given = flatten(read_toml(p))
+    if overrides:
+        given.update(overrides)
+    return build_scene(given, source, default_name)

@@ -1,0 +1,188 @@
+"""Scene files: TOML read into checked, dotted keys.
+
+A scene is a TOML file. Its keys are addressed in dotted form (``integrator.dt``), which
+is also how ``--set KEY=VALUE`` overrides them. Every problem kind declares its keys as
+:class:`Key` entries (type, default, unit, check, doc); loading rejects unknown keys and
+bad values with a :class:`SceneError` whose message is one line naming the file, the key
+and what was expected.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+REQUIRED = object()
+
+
+class SceneError(ValueError):
+    """A scene is invalid; the message is one line naming the source and the key."""
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key.
+
+    Parameters
+    ----------
+    name : str
+        Dotted key, e.g. ``"integrator.dt"``.
+    kind : str
+        ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``"vec3"`` (3 floats),
+        ``"floats"`` (list of floats), ``"float_or_auto"``, ``"table"`` (list of
+        ``[t, value]`` pairs) or ``"strs"`` (list of strings).
+    default : object
+        Default value, or ``REQUIRED``.
+    doc : str
+        One line for docs/scenes.md.
+    unit : str
+        Physical unit ("" when dimensionless).
+    check : callable, optional
+        ``check(value) -> str | None``: an explanation of what was expected, or None.
+    choices : tuple of str, optional
+        Allowed values of a string key.
+    """
+
+    name: str
+    kind: str
+    default: Any
+    doc: str
+    unit: str = ""
+    check: Callable[[Any], "str | None"] | None = None
+    choices: tuple[str, ...] | None = None
+
+
+def positive(v) -> str | None:
+    return None if v > 0 else "a positive number"
+
+
+def non_negative(v) -> str | None:
+    return None if v >= 0 else "a number >= 0"
+
+
+def flatten(table: Mapping, prefix: str = "") -> dict[str, Any]:
+    """Nested TOML tables to ``{"a.b.c": value}``."""
+    out: dict[str, Any] = {}
+    for k, v in table.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, Mapping):
+            out.update(flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``"KEY=VALUE"`` from the command line; VALUE is read as a TOML value when it
+    parses as one (numbers, booleans, arrays, quoted strings), else as a bare string."""
+    if "=" not in text:
+        raise SceneError(f"--set {text!r}: expected KEY=VALUE")
+    key, raw = text.split("=", 1)
+    key, raw = key.strip(), raw.strip()
+    if not key:
+        raise SceneError(f"--set {text!r}: empty key")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def coerce(key: Key, value, where: str):
+    """Check ``value`` against ``key.kind`` (and ``key.check``); return the clean value."""
+
+    def fail(expected: str):
+        raise SceneError(f"{where}: key '{key.name}' = {value!r}: expected {expected}")
+
+    k = key.kind
+    if k == "float":
+        if not _is_number(value):
+            fail("a finite number" + (f" [{key.unit}]" if key.unit else ""))
+        value = float(value)
+    elif k == "float_or_auto":
+        if value == "auto":
+            return value
+        if not _is_number(value):
+            fail('a finite number or "auto"')
+        value = float(value)
+    elif k == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            fail("an integer")
+    elif k == "bool":
+        if not isinstance(value, bool):
+            fail("true or false")
+    elif k == "str":
+        if not isinstance(value, str):
+            fail("a string")
+        if key.choices is not None and value not in key.choices:
+            fail("one of " + ", ".join(repr(c) for c in key.choices))
+    elif k == "vec3":
+        if not (isinstance(value, list) and len(value) == 3 and all(_is_number(x) for x in value)):
+            fail("a list of 3 numbers")
+        value = tuple(float(x) for x in value)
+    elif k == "floats":
+        if not (isinstance(value, list) and value and all(_is_number(x) for x in value)):
+            fail("a non-empty list of numbers")
+        value = tuple(float(x) for x in value)
+    elif k == "strs":
+        if not (isinstance(value, list) and all(isinstance(x, str) for x in value)):
+            fail("a list of strings")
+        if key.choices is not None:
+            bad = [x for x in value if x not in key.choices]
+            if bad:
+                fail("names among " + ", ".join(key.choices))
+        value = tuple(value)
+    elif k == "table":
+        ok = isinstance(value, list) and len(value) >= 2 and all(
+            isinstance(r, list) and len(r) == 2 and all(_is_number(x) for x in r) for r in value
+        )
+        if not ok:
+            fail("a list of at least two [t, value] pairs")
+        value = tuple((float(a), float(b)) for a, b in value)
+        if any(b[0] <= a[0] for a, b in zip(value, value[1:])):
+            fail("[t, value] pairs with strictly increasing t")
+    else:  # pragma: no cover - schema bug
+        raise AssertionError(f"unknown key kind {k!r}")
+    if key.check is not None and value != "auto":
+        msg = key.check(value)
+        if msg:
+            fail(msg)
+    return value
+
+
+def read_toml(path: Path) -> dict:
+    """Parse a TOML file, turning syntax errors into a one-line :class:`SceneError`."""
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such scene file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: invalid TOML: {exc}") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+
+
+def resolve_keys(keys: Mapping[str, Key], given: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """Apply defaults, reject unknown and missing keys, coerce every value."""
+    unknown = sorted(set(given) - set(keys))
+    if unknown:
+        near = [k for k in keys if k.split(".")[0] == unknown[0].split(".")[0]]
+        hint = f" (keys of this section: {', '.join(sorted(near))})" if near else ""
+        raise SceneError(f"{where}: unknown key '{unknown[0]}'{hint}")
+    out = {}
+    for name, key in keys.items():
+        if name in given:
+            out[name] = coerce(key, given[name], where)
+        elif key.default is REQUIRED:
+            raise SceneError(f"{where}: missing required key '{name}' ({key.doc})")
+        else:
+            out[name] = key.default
+    return out
