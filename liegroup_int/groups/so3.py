@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import LieGroup
-from .so3_coefficients import coeff_A, coeff_B, coeff_C, coeff_D
+from .so3_coefficients import coeff_D, coefficients
 
 
 def hat(a: np.ndarray) -> np.ndarray:
@@ -37,7 +37,11 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0), axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def angle(xi: np.ndarray) -> np.ndarray:
@@ -48,9 +52,8 @@ def angle(xi: np.ndarray) -> np.ndarray:
 def exp_so3(xi: np.ndarray) -> np.ndarray:
     """Rodrigues' formula ``I + A hat(xi) + B hat(xi)^2``; ``(..., 3) -> (..., 3, 3)``."""
     xi = np.asarray(xi, dtype=float)
-    t = angle(xi)
-    a = coeff_A(t)[..., None, None]
-    b = coeff_B(t)[..., None, None]
+    a, b = coefficients(angle(xi), "AB")
+    a, b = a[..., None, None], b[..., None, None]
     X = hat(xi)
     return np.eye(3) + a * X + b * (X @ X)
 
@@ -95,9 +98,9 @@ def log_so3(R: np.ndarray) -> np.ndarray:
 
 def dexp_so3(xi: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Left Jacobian applied to ``v``: ``v + B xi x v + C xi x (xi x v)``."""
-    t = angle(xi)
+    b, c = coefficients(angle(xi), "BC")
     xv = cross(xi, v)
-    return v + coeff_B(t)[..., None] * xv + coeff_C(t)[..., None] * cross(xi, xv)
+    return v + b[..., None] * xv + c[..., None] * cross(xi, xv)
 
 
 def dexpinv_so3(xi: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -109,9 +112,9 @@ def dexpinv_so3(xi: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def left_jacobian(xi: np.ndarray) -> np.ndarray:
     """Matrix ``J_l(xi) = dexp_xi``, shape ``(..., 3, 3)``; ``J_r(xi) = J_l(xi).T``."""
-    t = angle(xi)
+    b, c = coefficients(angle(xi), "BC")
     X = hat(xi)
-    return np.eye(3) + coeff_B(t)[..., None, None] * X + coeff_C(t)[..., None, None] * (X @ X)
+    return np.eye(3) + b[..., None, None] * X + c[..., None, None] * (X @ X)
 
 
 def left_jacobian_inv(xi: np.ndarray) -> np.ndarray:

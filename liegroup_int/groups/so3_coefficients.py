@@ -25,6 +25,12 @@ Definitions (theta = |xi|)::
     D = (1 - (t/2) cot(t/2))/t^2     dexpinv (inverse left Jacobian)
     E = (t^2 + 2 cos t - 2)/(2 t^4)  SE(3) Jacobian block Q
     F = (2 t - 3 sin t + t cos t)/(2 t^5)
+    B1 = B'(t)/t = (t sin t + 2 cos t - 2)/t^4      derivative of dexp along a curve
+    C1 = C'(t)/t = (3 sin t - 2 t - t cos t)/t^5     (method.md 3b: K_s update)
+
+``B1`` and ``C1`` lose about ``24 eps / t^4`` and ``90 eps / t^4`` to cancellation in
+closed form (5e-15 and 2e-14 at 1 rad), which is why the curvature-derivative update of the
+beam must not use them below the threshold.
 """
 
 from __future__ import annotations
@@ -65,6 +71,14 @@ def _coeffs_F() -> list[Fraction]:
     return [Fraction((-1) ** k * (k + 1), factorial(2 * k + 5)) for k in range(N_TERMS)]
 
 
+def _coeffs_B1() -> list[Fraction]:
+    return [Fraction((-1) ** (k + 1) * 2 * (k + 1), factorial(2 * k + 4)) for k in range(N_TERMS)]
+
+
+def _coeffs_C1() -> list[Fraction]:
+    return [Fraction((-1) ** (k + 1) * 2 * (k + 1), factorial(2 * k + 5)) for k in range(N_TERMS)]
+
+
 #: Exact Taylor coefficients in powers of ``theta**2`` (index k multiplies theta**(2k)).
 TAYLOR = {
     "A": _coeffs_A(),
@@ -73,6 +87,8 @@ TAYLOR = {
     "D": _coeffs_D(),
     "E": _coeffs_E(),
     "F": _coeffs_F(),
+    "B1": _coeffs_B1(),
+    "C1": _coeffs_C1(),
 }
 _TAYLOR_F = {k: np.array([float(c) for c in v]) for k, v in TAYLOR.items()}
 
@@ -126,6 +142,65 @@ def coeff_F(theta: np.ndarray) -> np.ndarray:
     )
 
 
+def coeff_B1(theta: np.ndarray) -> np.ndarray:
+    """``B'(theta)/theta = (theta sin(theta) + 2 cos(theta) - 2)/theta**4``."""
+    return _branch(theta, "B1", lambda t: (t * np.sin(t) + 2.0 * np.cos(t) - 2.0) / t**4)
+
+
+def coeff_C1(theta: np.ndarray) -> np.ndarray:
+    """``C'(theta)/theta = (3 sin(theta) - 2 theta - theta cos(theta))/theta**5``."""
+    return _branch(theta, "C1", lambda t: (3.0 * np.sin(t) - 2.0 * t - t * np.cos(t)) / t**5)
+
+
+def coefficients(theta: np.ndarray, keys: str) -> tuple[np.ndarray, ...]:
+    """Several coefficients at once, e.g. ``coefficients(t, "BCB1C1")`` -> ``(B, C, B1, C1)``.
+
+    One Horner pass over a stacked coefficient table serves every requested series, so
+    evaluating four coefficients costs about as much as one; closed forms are evaluated
+    only at the angles ``>= TAYLOR_THRESHOLD``.
+    """
+    theta = np.asarray(theta, dtype=float)
+    if theta.ndim == 0:
+        return tuple(x[0] for x in coefficients(theta.reshape(1), keys))
+    names, table = _stacked(keys)
+    t2 = theta * theta
+    shape = (-1,) + (1,) * theta.ndim
+    out = np.empty((len(names),) + theta.shape)
+    out[...] = table[:, -1].reshape(shape)
+    for j in range(table.shape[1] - 2, -1, -1):
+        out *= t2
+        out += table[:, j].reshape(shape)
+    large = theta >= TAYLOR_THRESHOLD
+    if np.any(large):
+        tl = theta[large]
+        for i, k in enumerate(names):
+            out[i][large] = COEFFICIENTS[k](tl)
+    return tuple(out)
+
+
+_STACKED: dict[str, tuple] = {}
+
+
+def _stacked(keys: str) -> tuple[list[str], np.ndarray]:
+    if keys not in _STACKED:
+        names = _split_keys(keys)
+        _STACKED[keys] = (names, np.stack([_TAYLOR_F[k] for k in names]))
+    return _STACKED[keys]
+
+
+def _split_keys(keys: str) -> list[str]:
+    """``"BCB1C1"`` -> ``["B", "C", "B1", "C1"]``."""
+    names, i = [], 0
+    while i < len(keys):
+        if i + 1 < len(keys) and keys[i + 1] == "1":
+            names.append(keys[i : i + 2])
+            i += 2
+        else:
+            names.append(keys[i])
+            i += 1
+    return names
+
+
 COEFFICIENTS = {
     "A": coeff_A,
     "B": coeff_B,
@@ -133,4 +208,6 @@ COEFFICIENTS = {
     "D": coeff_D,
     "E": coeff_E,
     "F": coeff_F,
+    "B1": coeff_B1,
+    "C1": coeff_C1,
 }

@@ -1,0 +1,19 @@
+"""Geometrically exact beam: explicit RKMK isogeometric collocation (Ferri & Marino)."""
+
+from .kinematics import curvature_update, jr_theta_s_derivative, jr_times, strains
+from .model import (
+    BoundaryConditions,
+    EndLoad,
+    InitialConditions,
+    Loads,
+    Material,
+    Profile,
+    Section,
+)
+from .problem import BeamProblem, BeamState, quadrature_weights
+
+__all__ = [
+    "BeamProblem", "BeamState", "Material", "Section", "Profile", "EndLoad", "Loads",
+    "BoundaryConditions", "InitialConditions", "curvature_update", "jr_times",
+    "jr_theta_s_derivative", "strains", "quadrature_weights",
+]

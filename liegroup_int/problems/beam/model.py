@@ -1,0 +1,220 @@
+"""Beam data: material, cross-section, boundary conditions and loads (frozen dataclasses).
+
+Units are SI throughout. The beam axis is the third material axis, so
+
+* ``C_N = diag(k G A, k G A, E A)``   (shear, shear, axial; ``k`` = shear factor),
+* ``C_M = diag(E I1, E I2, G J_t)``  (bending about d1, d2; torsion),
+* mass per length ``mu = rho A`` and inertia per length ``J = rho diag(I1, I2, I1 + I2)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from math import pi
+
+import numpy as np
+
+END_TYPES = ("clamped", "hinged", "free")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear elastic, isotropic material.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [Pa], > 0.
+    rho : float
+        Density [kg/m^3], > 0.
+    nu : float, optional
+        Poisson's ratio (``G = E / (2 (1 + nu))``); ignored when ``G`` is given.
+    G : float, optional
+        Shear modulus [Pa].
+    """
+
+    E: float
+    rho: float
+    nu: float = 0.3
+    G: float | None = None
+
+    def __post_init__(self):
+        if not self.E > 0:
+            raise ValueError(f"E: expected a positive Young's modulus, got {self.E!r}")
+        if not self.rho > 0:
+            raise ValueError(f"rho: expected a positive density, got {self.rho!r}")
+        if self.G is None and not (-1.0 < self.nu <= 0.5):
+            raise ValueError(f"nu: expected -1 < nu <= 0.5, got {self.nu!r}")
+        if self.G is not None and not self.G > 0:
+            raise ValueError(f"G: expected a positive shear modulus, got {self.G!r}")
+
+    @property
+    def shear_modulus(self) -> float:
+        return self.G if self.G is not None else self.E / (2.0 * (1.0 + self.nu))
+
+
+@dataclass(frozen=True)
+class Section:
+    """Cross-section constants.
+
+    Parameters
+    ----------
+    A : float
+        Area [m^2].
+    I1, I2 : float
+        Second moments about the material axes d1 and d2 [m^4].
+    J : float
+        Torsion constant [m^4] (stiffness ``G J``).
+    shear_factor : float
+        Shear correction factor ``k`` (``G A_s = k G A``); 1 by default, as in the paper.
+    """
+
+    A: float
+    I1: float
+    I2: float
+    J: float
+    shear_factor: float = 1.0
+
+    def __post_init__(self):
+        for name in ("A", "I1", "I2", "J", "shear_factor"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name}: expected a positive section constant, got {getattr(self, name)!r}")
+
+    @staticmethod
+    def circle(d: float, shear_factor: float = 1.0) -> "Section":
+        """Solid circle of diameter ``d``: ``A = pi d^2/4``, ``I = pi d^4/64``, ``J = pi d^4/32``."""
+        if not d > 0:
+            raise ValueError(f"d: expected a positive diameter, got {d!r}")
+        return Section(pi * d**2 / 4, pi * d**4 / 64, pi * d**4 / 64, pi * d**4 / 32, shear_factor)
+
+    @staticmethod
+    def square(t: float, shear_factor: float = 1.0) -> "Section":
+        """Solid square of side ``t``: ``I = t^4/12``, torsion constant ``0.1406 t^4``."""
+        if not t > 0:
+            raise ValueError(f"t: expected a positive side, got {t!r}")
+        return Section(t**2, t**4 / 12, t**4 / 12, 0.1406 * t**4, shear_factor)
+
+    @staticmethod
+    def rectangle(b: float, h: float, shear_factor: float = 1.0) -> "Section":
+        """Solid rectangle, width ``b`` along d1 and height ``h`` along d2.
+
+        ``I1 = b h^3/12`` (bending about d1), ``I2 = h b^3/12``; torsion constant of
+        Saint-Venant's series approximation ``a c^3 (1/3 - 0.21 (c/a)(1 - (c/a)^4/12))``
+        with ``a = max(b, h)``, ``c = min(b, h)``.
+        """
+        if not (b > 0 and h > 0):
+            raise ValueError(f"b, h: expected positive sides, got {b!r}, {h!r}")
+        a, c = max(b, h), min(b, h)
+        J = a * c**3 * (1.0 / 3.0 - 0.21 * (c / a) * (1.0 - (c / a) ** 4 / 12.0))
+        return Section(b * h, b * h**3 / 12, h * b**3 / 12, J, shear_factor)
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Scalar time profile multiplying a load vector.
+
+    Parameters
+    ----------
+    kind : {"constant", "step", "ramp", "table"}
+        ``constant``: 1; ``step``: 1 for ``t_on <= t < t_off``, else 0; ``ramp``: rises
+        linearly from 0 at ``t_on`` to 1 at ``t_on + ramp``, then stays (and drops to 0 at
+        ``t_off``); ``table``: piecewise linear through ``table`` points ``(t, factor)``,
+        constant beyond its ends.
+    """
+
+    kind: str = "constant"
+    t_on: float = 0.0
+    t_off: float = np.inf
+    ramp: float = 0.0
+    table: tuple = ()
+
+    def __post_init__(self):
+        if self.kind not in ("constant", "step", "ramp", "table"):
+            raise ValueError(f"profile: expected constant, step, ramp or table, got {self.kind!r}")
+        if self.kind == "ramp" and not self.ramp > 0:
+            raise ValueError(f"ramp: expected a positive ramp duration, got {self.ramp!r}")
+        if self.kind == "table" and len(self.table) < 2:
+            raise ValueError("table: expected at least two (t, factor) points")
+        if not self.t_off > self.t_on:
+            raise ValueError(f"t_off: expected t_off > t_on, got t_on={self.t_on!r}, t_off={self.t_off!r}")
+
+    def __call__(self, t: float) -> float:
+        if self.kind == "constant":
+            return 1.0
+        if self.kind == "table":
+            tt, ff = np.asarray(self.table, dtype=float).T
+            return float(np.interp(t, tt, ff))
+        if t < self.t_on or t >= self.t_off:
+            return 0.0
+        if self.kind == "step":
+            return 1.0
+        return min(1.0, (t - self.t_on) / self.ramp)
+
+    @property
+    def is_constant(self) -> bool:
+        return self.kind == "constant"
+
+
+@dataclass(frozen=True)
+class EndLoad:
+    """Force and couple applied at one end (spatial, dead loads) with a time profile."""
+
+    force: tuple = (0.0, 0.0, 0.0)
+    couple: tuple = (0.0, 0.0, 0.0)
+    force_profile: Profile = field(default_factory=Profile)
+    couple_profile: Profile = field(default_factory=Profile)
+
+    @property
+    def active(self) -> bool:
+        return bool(np.any(self.force) or np.any(self.couple))
+
+
+@dataclass(frozen=True)
+class Loads:
+    """External loads.
+
+    Parameters
+    ----------
+    distributed_force : (3,) tuple
+        Force per length [N/m], constant in time and space (spatial frame).
+    gravity : (3,) tuple
+        Acceleration [m/s^2]; adds ``mu * gravity`` to the distributed force.
+    distributed_couple : (3,) tuple
+        Couple per length [N m/m], spatial frame.
+    start, end : EndLoad
+        Loads at ``s = 0`` and ``s = L`` (only where that end is not clamped).
+    """
+
+    distributed_force: tuple = (0.0, 0.0, 0.0)
+    gravity: tuple = (0.0, 0.0, 0.0)
+    distributed_couple: tuple = (0.0, 0.0, 0.0)
+    start: EndLoad = field(default_factory=EndLoad)
+    end: EndLoad = field(default_factory=EndLoad)
+
+
+@dataclass(frozen=True)
+class BoundaryConditions:
+    """End conditions: ``clamped`` (position and rotation fixed), ``hinged`` (position
+    fixed, moment-free), ``free`` (force- and moment-free, or loaded)."""
+
+    start: str = "clamped"
+    end: str = "free"
+
+    def __post_init__(self):
+        for name in ("start", "end"):
+            if getattr(self, name) not in END_TYPES:
+                raise ValueError(f"{name}: expected one of {', '.join(END_TYPES)}, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
+class InitialConditions:
+    """Initial motion of the reference configuration.
+
+    ``velocity`` is a uniform translational velocity; ``omega`` a rigid angular velocity
+    about the point ``axis_point``: ``v(s) = velocity + omega x (c0(s) - axis_point)``,
+    ``w(s) = omega`` (spatial).
+    """
+
+    velocity: tuple = (0.0, 0.0, 0.0)
+    omega: tuple = (0.0, 0.0, 0.0)
+    axis_point: tuple = (0.0, 0.0, 0.0)

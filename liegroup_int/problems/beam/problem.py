@@ -1,0 +1,287 @@
+"""Geometrically exact beam as an RKMK plugin (method.md sections 2-3).
+
+State (:class:`BeamState`) at time ``t_n``:
+
+* ``c, v, w``: control values of centroid position, translational velocity and spatial
+  angular velocity, ``(n, 3)`` each;
+* ``R``: rotations at the collocation points, ``(n, 3, 3)``;
+* ``K, K_s``: material curvature and its arc-length derivative there, ``(n, 3)``.
+
+Increment (one array ``(4, n, 3)``): control values of ``(eta, theta, dv, dw)``. The
+action adds ``eta, dv, dw`` to ``c, v, w`` and rotates ``R <- exp(hat(theta_c)) R`` at the
+collocation points, updating ``K, K_s`` by eqs. (52)-(53). The stage rate is
+
+    M_c k = [v_c,  dexpinv_{theta_c}(w_c),  psi / mu,  R J^-1 chi]
+
+with the balance laws (16)-(17), enhanced collocation at Neumann ends and Dirichlet
+rows set on the right-hand side before the (once factorized) ``M_c`` solve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
+from ...iga import CollocationSpace
+from ...integrators import Problem
+from .kinematics import curvature_update, rot, rot_T, strains
+from .model import BoundaryConditions, InitialConditions, Loads, Material, Section
+
+C_STAR = 4.0
+
+
+@dataclass
+class BeamState:
+    """Beam state (see module docstring)."""
+
+    c: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    R: np.ndarray
+    K: np.ndarray
+    K_s: np.ndarray
+
+    def copy(self) -> "BeamState":
+        return BeamState(self.c.copy(), self.v.copy(), self.w.copy(), self.R.copy(), self.K.copy(),
+                         self.K_s.copy())
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K, "K_s": self.K_s}
+
+
+@dataclass(frozen=True)
+class _End:
+    """Precomputed data of one end: row index, outward normal, Neumann factor, loads."""
+
+    index: int
+    normal: float
+    factor: float  # C* / l_s
+    fix_position: bool
+    fix_rotation: bool
+    force_neumann: bool
+    moment_neumann: bool
+    load: object
+
+
+def quadrature_weights(space: CollocationSpace, n_gauss: int = 12) -> np.ndarray:
+    """Weights ``w`` with ``int_0^L f ds ~= sum_i w_i f(s_i)`` over collocation values.
+
+    Exact for ``f`` in the trial space: ``w = M_c^-T b`` with ``b_j = int R_j J du``.
+    """
+    knots = np.unique(space.curve.knots)
+    x, gw = np.polynomial.legendre.leggauss(n_gauss)
+    a, b = knots[:-1, None], knots[1:, None]
+    u = (0.5 * (b - a) * x + 0.5 * (a + b)).ravel()
+    wu = (0.5 * (b - a) * gw).ravel()
+    basis = space.curve.basis(u, 0)[0]
+    jac = np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
+    bj = basis.T @ (wu * jac)
+    return scipy.linalg.solve(space.N0.T, bj)
+
+
+class BeamProblem(Problem):
+    """Explicit RKMK IGA-C beam (Ferri & Marino), one problem plugin.
+
+    Parameters
+    ----------
+    space : CollocationSpace
+        Basis, collocation points and reference geometry.
+    material : Material
+    section : Section
+    bcs : BoundaryConditions
+    loads : Loads
+    initial : InitialConditions
+    """
+
+    def __init__(self, space: CollocationSpace, material: Material, section: Section,
+                 bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
+                 initial: InitialConditions = InitialConditions()):
+        self.space, self.material, self.section = space, material, section
+        self.bcs, self.loads, self.initial = bcs, loads, initial
+        n = space.n_ctrl
+        self.n = n
+        E, G, rho = material.E, material.shear_modulus, material.rho
+        s = section
+        self.CN = np.array([s.shear_factor * G * s.A, s.shear_factor * G * s.A, E * s.A])
+        self.CM = np.array([E * s.I1, E * s.I2, G * s.J])
+        self.mu = rho * s.A
+        self.Jm = rho * np.array([s.I1, s.I2, s.I1 + s.I2])
+        self.N0, self.N1, self.N2 = space.N0, space.N1, space.N2
+        self.gamma0 = rot_T(space.R0, space.c0_s)
+        self.K0, self.K0_s = space.K0, space.K0_s
+        self.curved = bool(np.any(np.abs(space.K0) > 1e-14) or np.any(np.abs(space.K0_s) > 1e-14))
+        self.q = np.asarray(loads.distributed_force, float) + self.mu * np.asarray(loads.gravity, float)
+        self.has_q = bool(np.any(self.q))
+        self.m_dist = np.asarray(loads.distributed_couple, float)
+        self.has_m = bool(np.any(self.m_dist))
+        self.ends = tuple(
+            e for e in (self._end(0, -1.0, bcs.start, loads.start, space.l_s_start),
+                        self._end(n - 1, 1.0, bcs.end, loads.end, space.l_s_end))
+        )
+        self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
+        self.quad = quadrature_weights(space)
+        self._fix_rows = self._dirichlet_mask()
+
+    # ------------------------------------------------------------------ set-up
+    @staticmethod
+    def _end(index, normal, kind, load, l_s):
+        if kind == "clamped" and load.active:
+            raise ValueError(f"loads.{'start' if normal < 0 else 'end'}: a load on a clamped end does no work; "
+                             "remove it or free the end")
+        if kind == "hinged" and np.any(load.force):
+            raise ValueError(f"loads.{'start' if normal < 0 else 'end'}.force: a force on a hinged end is "
+                             "taken by the support; remove it or free the end")
+        return _End(
+            index=index, normal=normal, factor=C_STAR / l_s,
+            fix_position=kind in ("clamped", "hinged"), fix_rotation=kind == "clamped",
+            force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load,
+        )
+
+    def _dirichlet_mask(self) -> np.ndarray:
+        """Boolean ``(n, 4)``: which (row, field) right-hand sides are prescribed rates
+        (fields: position, rotation, velocity, angular velocity)."""
+        mask = np.zeros((self.n, 4), dtype=bool)
+        for e in self.ends:
+            if e.fix_position:
+                mask[e.index, [0, 2]] = True
+            if e.fix_rotation:
+                mask[e.index, [1, 3]] = True
+        return mask
+
+    def initial_state(self) -> BeamState:
+        """Reference configuration with the initial velocity field."""
+        sp = self.space
+        c = np.array(sp.curve.control_points, dtype=float)
+        ic = self.initial
+        omega = np.asarray(ic.omega, float)
+        v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
+                                                     sp.c0 - np.asarray(ic.axis_point, float))
+        v = sp.solve(v_c)
+        w = np.tile(omega, (self.n, 1))
+        for e in self.ends:  # supports do not move
+            if e.fix_position and np.any(v[e.index]):
+                raise ValueError(f"initial: the velocity field moves the supported end at s = "
+                                 f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
+            if e.fix_rotation and np.any(omega):
+                raise ValueError("initial.omega: a clamped end cannot rotate")
+        return BeamState(c, v, w, np.array(sp.R0), np.array(self.K0), np.array(self.K0_s))
+
+    # ------------------------------------------------------------------ RKMK contract
+    def zero_increment(self, y) -> np.ndarray:
+        return np.zeros((4, self.n, 3))
+
+    def action(self, u: np.ndarray, y: BeamState) -> BeamState:
+        th = u[1]
+        th_c, th_s, th_ss = self.N0 @ th, self.N1 @ th, self.N2 @ th
+        K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, th_ss)
+        return BeamState(y.c + u[0], y.v + u[2], y.w + u[3], exp_so3(th_c) @ y.R, K, K_s)
+
+    def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """``dexpinv`` on control values: pointwise at the collocation points on the
+        rotational component, then projected back with ``M_c^-1``."""
+        th_c = self.N0 @ u[1]
+        out = np.array(w, dtype=float, copy=True)
+        out[1] = self.space.solve(dexpinv_so3(th_c, self.N0 @ w[1]))
+        return out
+
+    def vector_field(self, t: float, y: BeamState) -> np.ndarray:
+        """``f(t, y)`` as control values (no dexpinv): the stage rate at ``u = 0``."""
+        return self._solve(self._rates(t, y, np.zeros((self.n, 3))))
+
+    def increment_rate(self, t: float, y: BeamState, u: np.ndarray) -> np.ndarray:
+        return self._solve(self._rates(t, y, self.N0 @ u[1]))
+
+    def increment_scale(self, y: BeamState) -> np.ndarray:
+        scale = np.ones((4, self.n, 3))
+        scale[0] = np.abs(y.c)
+        return scale
+
+    def rotation_angle(self, u: np.ndarray) -> float:
+        return float(np.max(angle(self.N0 @ u[1])))
+
+    # ------------------------------------------------------------------ stage kernels
+    def _solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Dirichlet rows, then one ``M_c`` solve for all 12 columns -> ``(4, n, 3)``."""
+        rhs[self._fix_rows] = 0.0
+        k = self.space.solve(rhs.reshape(self.n, 12))
+        return k.reshape(self.n, 4, 3).transpose(1, 0, 2)
+
+    def _rates(self, t: float, y: BeamState, th_c: np.ndarray) -> np.ndarray:
+        """Right-hand sides at the collocation points, ``(n, 4, 3)``."""
+        R, K = y.R, y.K
+        c_s, c_ss = self.N1 @ y.c, self.N2 @ y.c
+        w_c = self.N0 @ y.w
+        Rt_cs, gam, gam_s = strains(R, c_s, c_ss, K, self.gamma0)
+        KM, KM_s = (K - self.K0, y.K_s - self.K0_s) if self.curved else (K, y.K_s)
+        N, M = self.CN * gam, self.CM * KM
+        n_s = rot(R, cross(K, N) + self.CN * gam_s)
+        Om = rot_T(R, w_c)
+        tq = -cross(Om, self.Jm * Om) + cross(K, M) + self.CM * KM_s + cross(Rt_cs, N)
+        if self.has_q:
+            n_s = n_s + self.q
+        if self.has_m:
+            tq = tq + rot_T(R, np.broadcast_to(self.m_dist, tq.shape))
+        for e in self.neumann_ends:
+            i, ld = e.index, e.load
+            if e.force_neumann:
+                n_c = np.asarray(ld.force, float) * ld.force_profile(t) if np.any(ld.force) else 0.0
+                n_s[i] += e.factor * (n_c - e.normal * (R[i] @ N[i]))
+            if e.moment_neumann:
+                m_c = R[i].T @ (np.asarray(ld.couple, float) * ld.couple_profile(t)) if np.any(ld.couple) else 0.0
+                tq[i] += e.factor * (m_c - e.normal * M[i])
+        rhs = np.empty((self.n, 4, 3))
+        rhs[:, 0] = self.N0 @ y.v
+        rhs[:, 1] = dexpinv_so3(th_c, w_c)
+        rhs[:, 2] = n_s / self.mu
+        rhs[:, 3] = rot(R, tq / self.Jm)
+        return rhs
+
+    # ------------------------------------------------------------------ diagnostics
+    def tip(self, y: BeamState) -> np.ndarray:
+        """Centroid at ``s = L`` (last control point of an open knot vector), ``(3,)``."""
+        return y.c[-1].copy()
+
+    def energy_parts(self, y: BeamState) -> dict[str, float]:
+        """Kinetic, strain and load-potential energy [J] by collocation quadrature."""
+        R, K = y.R, y.K
+        c_c, v_c, w_c = self.N0 @ y.c, self.N0 @ y.v, self.N0 @ y.w
+        _, gam, _ = strains(R, self.N1 @ y.c, self.N2 @ y.c, K, self.gamma0)
+        KM = K - self.K0
+        Om = rot_T(R, w_c)
+        kin = 0.5 * (self.mu * np.sum(v_c**2, axis=1) + np.sum(self.Jm * Om**2, axis=1))
+        strain = 0.5 * (np.sum(self.CN * gam**2, axis=1) + np.sum(self.CM * KM**2, axis=1))
+        pot = -(c_c @ self.q) if self.has_q else np.zeros(self.n)
+        potential = float(self.quad @ pot)
+        for e in self.neumann_ends:
+            ld = e.load
+            if e.force_neumann and np.any(ld.force) and ld.force_profile.is_constant:
+                potential -= float(np.dot(ld.force, y.c[e.index]))
+        return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
+
+    def energy(self, y: BeamState) -> float:
+        """Total energy: kinetic + strain + distributed-load potential - work of constant
+        end forces (end couples and time-varying loads are not included)."""
+        p = self.energy_parts(y)
+        return p["kinetic"] + p["strain"] + p["potential"]
+
+    def momentum(self, y: BeamState) -> tuple[np.ndarray, np.ndarray]:
+        """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
+        c_c, v_c, w_c = self.N0 @ y.c, self.N0 @ y.v, self.N0 @ y.w
+        p = self.mu * v_c
+        h = cross(c_c, p) + rot(y.R, self.Jm * rot_T(y.R, w_c))
+        return self.quad @ p, self.quad @ h
+
+    def orth_error(self, y: BeamState) -> float:
+        """Largest ``|R^T R - I|`` (Frobenius) over the collocation points."""
+        E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)
+        return float(np.sqrt(np.max(np.einsum("nij,nij->n", E, E))))
+
+    def centreline(self, y: BeamState, u: np.ndarray) -> np.ndarray:
+        """Centroid positions at parameters ``u``, ``(m, 3)``."""
+        return self.space.point_matrix(u) @ y.c
+
+    def is_finite(self, y: BeamState) -> bool:
+        return bool(np.all(np.isfinite(y.c)) and np.all(np.isfinite(y.R)))
