@@ -1,5 +1,6 @@
 """Scenes: TOML files into validated frozen dataclasses, and the built-in scene registry."""
 
+from . import beam as _beam  # noqa: F401  (registers the kind)
 from . import rigid_body as _rigid_body  # noqa: F401  (registers the kind)
 from .registry import builtin_descriptions, builtin_names, builtin_path
 from .scene import KINDS, IntegratorSpec, OutputSpec, ProblemKind, Scene, Simulation, build_scene, load_scene

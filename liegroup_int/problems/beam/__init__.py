@@ -9,11 +9,12 @@ from .model import (
     Material,
     Profile,
     Section,
+    SectionConstants,
 )
 from .problem import BeamProblem, BeamState, quadrature_weights
 
 __all__ = [
-    "BeamProblem", "BeamState", "Material", "Section", "Profile", "EndLoad", "Loads",
+    "BeamProblem", "BeamState", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
     "BoundaryConditions", "InitialConditions", "curvature_update", "jr_times",
     "jr_theta_s_derivative", "strains", "quadrature_weights",
 ]

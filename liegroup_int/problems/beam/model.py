@@ -110,6 +110,48 @@ class Section:
 
 
 @dataclass(frozen=True)
+class SectionConstants:
+    """Stiffness and inertia per unit length, in the material frame (axis 3 = beam axis).
+
+    Parameters
+    ----------
+    CN : (3,) tuple
+        ``(G A_1, G A_2, E A)`` [N].
+    CM : (3,) tuple
+        ``(E I_1, E I_2, G J)`` [N m^2].
+    mu : float
+        Mass per length ``rho A`` [kg/m].
+    Jm : (3,) tuple
+        Rotational inertia per length ``rho (I_1, I_2, I_p)`` [kg m].
+    """
+
+    CN: tuple
+    CM: tuple
+    mu: float
+    Jm: tuple
+
+    def __post_init__(self):
+        for name in ("CN", "CM", "Jm"):
+            v = getattr(self, name)
+            if len(v) != 3 or not all(x > 0 for x in v):
+                raise ValueError(f"{name}: expected three positive constants, got {v!r}")
+        if not self.mu > 0:
+            raise ValueError(f"mu: expected a positive mass per length, got {self.mu!r}")
+
+    @staticmethod
+    def from_material(material: "Material", section: "Section") -> "SectionConstants":
+        """``C_N = diag(k G A, k G A, E A)``, ``C_M = diag(E I1, E I2, G J)``,
+        ``mu = rho A``, ``J = rho diag(I1, I2, I1 + I2)``."""
+        E, G, rho, s = material.E, material.shear_modulus, material.rho, section
+        return SectionConstants(
+            CN=(s.shear_factor * G * s.A, s.shear_factor * G * s.A, E * s.A),
+            CM=(E * s.I1, E * s.I2, G * s.J),
+            mu=rho * s.A,
+            Jm=(rho * s.I1, rho * s.I2, rho * (s.I1 + s.I2)),
+        )
+
+
+@dataclass(frozen=True)
 class Profile:
     """Scalar time profile multiplying a load vector.
 

@@ -28,7 +28,7 @@ from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
 from ...integrators import Problem
 from .kinematics import curvature_update, rot, rot_T, strains
-from .model import BoundaryConditions, InitialConditions, Loads, Material, Section
+from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
 
 C_STAR = 4.0
 
@@ -89,26 +89,24 @@ class BeamProblem(Problem):
     ----------
     space : CollocationSpace
         Basis, collocation points and reference geometry.
-    material : Material
-    section : Section
+    constants : SectionConstants
+        Stiffness and inertia per length (``SectionConstants.from_material``).
     bcs : BoundaryConditions
     loads : Loads
     initial : InitialConditions
     """
 
-    def __init__(self, space: CollocationSpace, material: Material, section: Section,
+    def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions()):
-        self.space, self.material, self.section = space, material, section
+        self.space, self.constants = space, constants
         self.bcs, self.loads, self.initial = bcs, loads, initial
         n = space.n_ctrl
         self.n = n
-        E, G, rho = material.E, material.shear_modulus, material.rho
-        s = section
-        self.CN = np.array([s.shear_factor * G * s.A, s.shear_factor * G * s.A, E * s.A])
-        self.CM = np.array([E * s.I1, E * s.I2, G * s.J])
-        self.mu = rho * s.A
-        self.Jm = rho * np.array([s.I1, s.I2, s.I1 + s.I2])
+        self.CN = np.asarray(constants.CN, dtype=float)
+        self.CM = np.asarray(constants.CM, dtype=float)
+        self.mu = float(constants.mu)
+        self.Jm = np.asarray(constants.Jm, dtype=float)
         self.N0, self.N1, self.N2 = space.N0, space.N1, space.N2
         self.gamma0 = rot_T(space.R0, space.c0_s)
         self.K0, self.K0_s = space.K0, space.K0_s

@@ -1,0 +1,70 @@
+"""Spectrum of the linearized increment map, for stable step sizes.
+
+For a state ``y`` the map ``G(u) = increment_rate(t, Lambda(u, y), u)`` sends an
+increment to its rate; RKMK applied near ``y`` behaves like RK applied to
+``du/dt = G(u)``, so the eigenvalues of ``dG/du`` at ``u = 0`` decide stability:
+a step ``h`` is stable when ``h * lambda`` lies in the method's stability region for
+every eigenvalue ``lambda``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .problem import Problem
+
+
+def jacobian(problem: Problem, t: float, y, eps: float | None = None) -> np.ndarray:
+    """Dense ``dG/du`` at ``u = 0`` by central differences, ``(m, m)`` with ``m`` the
+    increment size. Each column costs two rate evaluations; use for small problems."""
+    z = problem.zero_increment(y)
+    m = z.size
+    scale = np.maximum(problem.increment_scale(y).ravel(), 1.0)
+    eps = eps if eps is not None else 1e-6
+    J = np.empty((m, m))
+    for j in range(m):
+        e = np.zeros(m)
+        e[j] = eps * scale[j]
+        du = e.reshape(z.shape)
+        gp = problem.increment_rate(t, problem.action(du, y), du).ravel()
+        gm = problem.increment_rate(t, problem.action(-du, y), -du).ravel()
+        J[:, j] = (gp - gm) / (2.0 * e[j])
+    return J
+
+
+def eigenvalues(problem: Problem, t: float, y) -> np.ndarray:
+    """All eigenvalues of the linearized increment map (dense; small problems)."""
+    return np.linalg.eigvals(jacobian(problem, t, y))
+
+
+def spectral_radius(problem: Problem, t: float, y, iterations: int = 60, seed: int = 0,
+                    eps: float = 1e-7) -> float:
+    """Largest ``|lambda|`` of the linearized increment map by power iteration on
+    finite-difference Jacobian-vector products (two rate evaluations per iteration).
+
+    The dominant eigenvalues of an undamped structure come in ``+-i omega`` pairs, for
+    which plain power iteration oscillates; iterating with ``dG^2`` (whose dominant
+    eigenvalue ``-omega^2`` is real) converges. Returns ``sqrt(|rho(dG^2)|)``.
+    """
+    z = problem.zero_increment(y)
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal(z.shape)
+    x /= np.linalg.norm(x)
+    g0 = problem.increment_rate(t, y, z)
+
+    def jv(v):
+        du = eps * v
+        return (problem.increment_rate(t, problem.action(du, y), du) - g0) / eps
+
+    rho = 0.0
+    for _ in range(iterations):
+        x2 = jv(jv(x))
+        rho_new = float(np.linalg.norm(x2))
+        if rho_new == 0.0:
+            return 0.0
+        x = x2 / rho_new
+        if abs(rho_new - rho) <= 1e-4 * rho_new:
+            rho = rho_new
+            break
+        rho = rho_new
+    return float(np.sqrt(rho))

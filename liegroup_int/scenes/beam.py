@@ -1,0 +1,258 @@
+"""Scene kind ``beam``: geometrically exact beams by explicit RKMK IGA-C."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..iga import CollocationSpace, NurbsCurve, arc_nurbs_quadratic, helix_quarter, k_refine, straight
+from ..problems.beam import (
+    BeamProblem,
+    BoundaryConditions,
+    EndLoad,
+    InitialConditions,
+    Loads,
+    Material,
+    Profile,
+    Section,
+    SectionConstants,
+)
+from .scene import ProblemKind, Scene, Simulation, register_kind
+from .schema import Key, SceneError, non_negative, positive
+
+ZERO = (0.0, 0.0, 0.0)
+
+
+def _int_at_least(lo):
+    return lambda v: None if v >= lo else f"an integer >= {lo}"
+
+
+def _end_keys(end: str) -> list[Key]:
+    at = "s = 0" if end == "start" else "s = L"
+    return [
+        Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load)", "N"),
+        Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial)", "N m"),
+        Key(f"loads.{end}.profile", "str", "constant", f"time profile of the {end} loads",
+            choices=("constant", "step", "ramp", "table")),
+        Key(f"loads.{end}.t_on", "float", 0.0, "profile switch-on time (step, ramp)", "s", non_negative),
+        Key(f"loads.{end}.t_off", "float", float("inf"), "profile switch-off time (step, ramp)", "s", positive),
+        Key(f"loads.{end}.ramp", "float", 1.0, "ramp duration (ramp)", "s", positive),
+        Key(f"loads.{end}.table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
+    ]
+
+
+KEYS = {
+    k.name: k
+    for k in [
+        Key("geometry.kind", "str", "straight", "reference centreline", choices=("straight", "arch", "helix", "nurbs")),
+        Key("geometry.length", "float", 1.0, "length of a straight beam", "m", positive),
+        Key("geometry.direction", "vec3", (1.0, 0.0, 0.0), "axis direction of a straight beam"),
+        Key("geometry.origin", "vec3", ZERO, "position of s = 0 of a straight beam", "m"),
+        Key("geometry.degree", "int", 2, "degree of a given NURBS (kind = nurbs)", "", _int_at_least(1)),
+        Key("geometry.control_points", "floats", (0.0,), "flat list of x, y, z of the NURBS control points", "m"),
+        Key("geometry.weights", "floats", (1.0,), "NURBS weights (default all 1)"),
+        Key("geometry.knots", "floats", (0.0,), "NURBS knot vector (default open uniform)"),
+        Key("geometry.reference_vector", "vec3", ZERO,
+            "vector defining the section axis d1 (projected normal to the tangent); 0 = automatic"),
+        Key("space.degree", "int", 4, "spline degree p", "", _int_at_least(2)),
+        Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1)", "", _int_at_least(4)),
+        Key("material.E", "float", None, "Young's modulus", "Pa", positive),
+        Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
+        Key("material.G", "float", None, "shear modulus (overrides nu)", "Pa", positive),
+        Key("material.rho", "float", None, "density", "kg/m^3", positive),
+        Key("section.shape", "str", "circle", "cross-section", choices=("circle", "square", "rectangle", "explicit")),
+        Key("section.d", "float", None, "diameter (circle)", "m", positive),
+        Key("section.t", "float", None, "side (square)", "m", positive),
+        Key("section.b", "float", None, "width along d1 (rectangle)", "m", positive),
+        Key("section.h", "float", None, "height along d2 (rectangle)", "m", positive),
+        Key("section.shear_factor", "float", 1.0, "shear correction factor k (G A_s = k G A)", "", positive),
+        Key("section.EA", "float", None, "axial stiffness (explicit)", "N", positive),
+        Key("section.GA", "float", None, "shear stiffness (explicit)", "N", positive),
+        Key("section.EI1", "float", None, "bending stiffness about d1 (explicit)", "N m^2", positive),
+        Key("section.EI2", "float", None, "bending stiffness about d2 (explicit)", "N m^2", positive),
+        Key("section.GJ", "float", None, "torsional stiffness (explicit)", "N m^2", positive),
+        Key("section.rhoA", "float", None, "mass per length (explicit)", "kg/m", positive),
+        Key("section.rhoI1", "float", None, "rotational inertia per length about d1 (explicit)", "kg m", positive),
+        Key("section.rhoI2", "float", None, "rotational inertia per length about d2 (explicit)", "kg m", positive),
+        Key("section.rhoJ", "float", None, "polar inertia per length (explicit; default rhoI1 + rhoI2)", "kg m", positive),
+        Key("bc.start", "str", "clamped", "end condition at s = 0", choices=("clamped", "hinged", "free")),
+        Key("bc.end", "str", "free", "end condition at s = L", choices=("clamped", "hinged", "free")),
+        Key("loads.gravity", "vec3", ZERO, "gravitational acceleration (adds rho A g per length)", "m/s^2"),
+        Key("loads.distributed_force", "vec3", ZERO, "force per length, spatial", "N/m"),
+        Key("loads.distributed_couple", "vec3", ZERO, "couple per length, spatial", "N m/m"),
+        *_end_keys("start"),
+        *_end_keys("end"),
+        Key("initial.velocity", "vec3", ZERO, "uniform initial velocity", "m/s"),
+        Key("initial.omega", "vec3", ZERO, "initial rigid angular velocity (spatial)", "rad/s"),
+        Key("initial.axis_point", "vec3", ZERO, "point on the axis of the initial rigid rotation", "m"),
+    ]
+}
+
+QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error")
+COLUMNS = {
+    "tip": ["tip_x", "tip_y", "tip_z"],
+    "momentum": ["p_x", "p_y", "p_z"],
+    "angular_momentum": ["h_x", "h_y", "h_z"],
+}
+
+
+def _err(scene: Scene, key: str, expected: str):
+    raise SceneError(f"{scene.source}: key '{key}': expected {expected}")
+
+
+def _need(scene: Scene, key: str, why: str):
+    if scene[key] is None:
+        raise SceneError(f"{scene.source}: missing key '{key}' ({why})")
+    return scene[key]
+
+
+def geometry(scene: Scene) -> NurbsCurve:
+    """Reference centreline at the scene's ``(space.degree, space.n_ctrl)``."""
+    kind, p, n = scene["geometry.kind"], scene["space.degree"], scene["space.n_ctrl"]
+    if n < p + 1:
+        _err(scene, "space.n_ctrl", f"at least space.degree + 1 = {p + 1} control points, got {n}")
+    try:
+        if kind == "straight":
+            if not np.any(scene["geometry.direction"]):
+                _err(scene, "geometry.direction", "a non-zero vector")
+            return straight(scene["geometry.length"], scene["geometry.direction"], p, n, scene["geometry.origin"])
+        if kind == "arch":
+            return arc_nurbs_quadratic(p, n)
+        if kind == "helix":
+            return helix_quarter(p, n)
+        pts = np.asarray(scene["geometry.control_points"], float)
+        if pts.size < 6 or pts.size % 3:
+            _err(scene, "geometry.control_points", "a flat list of x, y, z triples (at least two points)")
+        pts = pts.reshape(-1, 3)
+        deg = scene["geometry.degree"]
+        w = np.asarray(scene["geometry.weights"], float)
+        if w.size == 1 and w[0] == 1.0:
+            w = np.ones(len(pts))
+        if w.size != len(pts) or np.any(w <= 0):
+            _err(scene, "geometry.weights", f"{len(pts)} positive weights")
+        kv = np.asarray(scene["geometry.knots"], float)
+        if kv.size == 1:
+            from ..iga import open_uniform_knots
+
+            kv = open_uniform_knots(deg, len(pts))
+        base = NurbsCurve(deg, kv, pts, w)
+        if p < deg:
+            _err(scene, "space.degree", f"at least the NURBS degree {deg}")
+        return k_refine(base, p, n)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: geometry: {exc}") from None
+
+
+def constants(scene: Scene) -> SectionConstants:
+    shape = scene["section.shape"]
+    try:
+        if shape == "explicit":
+            need = {k: _need(scene, f"section.{k}", "explicit section") for k in
+                    ("EA", "GA", "EI1", "EI2", "GJ", "rhoA", "rhoI1", "rhoI2")}
+            rhoJ = scene["section.rhoJ"] if scene["section.rhoJ"] is not None else need["rhoI1"] + need["rhoI2"]
+            return SectionConstants(CN=(need["GA"], need["GA"], need["EA"]), CM=(need["EI1"], need["EI2"], need["GJ"]),
+                                    mu=need["rhoA"], Jm=(need["rhoI1"], need["rhoI2"], rhoJ))
+        E = _need(scene, "material.E", f"{shape} section")
+        rho = _need(scene, "material.rho", f"{shape} section")
+        material = Material(E=E, rho=rho, nu=scene["material.nu"], G=scene["material.G"])
+        k = scene["section.shear_factor"]
+        if shape == "circle":
+            section = Section.circle(_need(scene, "section.d", "circle"), k)
+        elif shape == "square":
+            section = Section.square(_need(scene, "section.t", "square"), k)
+        else:
+            section = Section.rectangle(_need(scene, "section.b", "rectangle"), _need(scene, "section.h", "rectangle"), k)
+        return SectionConstants.from_material(material, section)
+    except ValueError as exc:
+        name, _, msg = str(exc).partition(":")
+        prefix = "material" if name in ("E", "rho", "nu", "G") else "section"
+        raise SceneError(f"{scene.source}: key '{prefix}.{name}': {msg.strip()}") from None
+
+
+def _end_load(scene: Scene, end: str) -> EndLoad:
+    pre = f"loads.{end}"
+    try:
+        prof = Profile(kind=scene[f"{pre}.profile"], t_on=scene[f"{pre}.t_on"], t_off=scene[f"{pre}.t_off"],
+                       ramp=scene[f"{pre}.ramp"], table=scene[f"{pre}.table"])
+    except ValueError as exc:
+        name, _, msg = str(exc).partition(":")
+        raise SceneError(f"{scene.source}: key '{pre}.{name}': {msg.strip()}") from None
+    return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof)
+
+
+def problem(scene: Scene) -> BeamProblem:
+    """The :class:`BeamProblem` of a validated beam scene."""
+    curve = geometry(scene)
+    a = scene["geometry.reference_vector"]
+    try:
+        space = CollocationSpace(curve, reference_vector=None if not np.any(a) else a)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: key 'geometry.reference_vector': {exc}") from None
+    loads = Loads(distributed_force=scene["loads.distributed_force"], gravity=scene["loads.gravity"],
+                  distributed_couple=scene["loads.distributed_couple"], start=_end_load(scene, "start"),
+                  end=_end_load(scene, "end"))
+    bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"])
+    ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
+    try:
+        return BeamProblem(space, constants(scene), bcs, loads, ic)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
+
+
+def check(scene: Scene) -> None:
+    pb = problem(scene)
+    try:
+        pb.initial_state()
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
+
+
+def diagnostics(pb: BeamProblem, names) -> dict:
+    table = {
+        "tip": lambda t, y: pb.tip(y),
+        "energy": lambda t, y: pb.energy(y),
+        "kinetic": lambda t, y: pb.energy_parts(y)["kinetic"],
+        "strain": lambda t, y: pb.energy_parts(y)["strain"],
+        "momentum": lambda t, y: pb.momentum(y)[0],
+        "angular_momentum": lambda t, y: pb.momentum(y)[1],
+        "orth_error": lambda t, y: pb.orth_error(y),
+    }
+    return {q: table[q] for q in names}
+
+
+class ShapeRecorder:
+    """Keeps the control points (and times) at output times, for shape plots."""
+
+    def __init__(self):
+        self.t: list[float] = []
+        self.c: list[np.ndarray] = []
+
+    def __call__(self, t, y):
+        self.t.append(float(t))
+        self.c.append(y.c.copy())
+
+
+def build(scene: Scene) -> Simulation:
+    pb = problem(scene)
+    y0 = pb.initial_state()
+
+    def final_state(y):
+        return {"tip": pb.tip(y).tolist(), "energy": pb.energy(y), "orth_error": pb.orth_error(y)}
+
+    info = {
+        "discretization": {"degree": scene["space.degree"], "n_ctrl": scene["space.n_ctrl"],
+                           "length": pb.space.length, "C_star": 4.0},
+        "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
+    }
+    sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
+                     final_state=final_state, info=info, snapshot=ShapeRecorder())
+    return sim
+
+
+KIND = register_kind(ProblemKind(
+    name="beam",
+    keys=KEYS,
+    quantities=QUANTITIES,
+    default_quantities=("tip", "energy"),
+    build=build,
+    check=check,
+))
