@@ -64,6 +64,26 @@ class Progress:
             self.bar.close()
 
 
+def write_plots(out_dir: Path, scene: Scene, sim, history: Path) -> list[str]:
+    """History PNG, and for problems that record shapes, a deformed-shape PNG (+ npz)."""
+    from .io import plot_history, plot_shapes, read_history
+
+    made = []
+    data = read_history(history)
+    if len(data.get("t", [])) >= 2:
+        made.append(plot_history(data, out_dir / "history.png", title=scene.name).name)
+    snap = sim.snapshot
+    if snap is not None and len(snap.t) >= 2:
+        pb = sim.problem
+        u = np.linspace(0.0, 1.0, 101)
+        B = pb.space.point_matrix(u)
+        shapes = np.einsum("uj,mjk->muk", B, np.asarray(snap.c))
+        np.savez_compressed(out_dir / "shapes.npz", t=np.asarray(snap.t), control_points=np.asarray(snap.c), u=u,
+                            centreline=shapes)
+        made.append(plot_shapes(np.asarray(snap.t), shapes, out_dir / "shapes.png", title=scene.name).name)
+    return made
+
+
 def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
     """Integrate ``scene`` and write ``history.csv`` and ``summary.json`` into ``out_dir``.
 
@@ -135,6 +155,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
     else:
         summary["error"] = error
     summary["history_rows"] = writer.rows
+    summary["plots"] = write_plots(out_dir, scene, sim, history)
     write_json(out_dir / "summary.json", summary)
     if error is not None:
         raise RunError(error + f" (history up to the last output is in {history})")

@@ -1,0 +1,84 @@
+"""PNG plots of a run: histories against time and deformed beam shapes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "") -> Path:
+    """One panel per group of columns (``tip_*`` together, others alone), against ``t``.
+
+    Energy-like columns are shown as the change from their initial value.
+    """
+    plt = _pyplot()
+    t = history["t"]
+    groups: dict[str, list[str]] = {}
+    for name in history:
+        if name == "t":
+            continue
+        key = name.rsplit("_", 1)[0] if name.rsplit("_", 1)[-1] in ("x", "y", "z") else name
+        groups.setdefault(key, []).append(name)
+    fig, axes = plt.subplots(len(groups), 1, figsize=(7, 2.2 * len(groups) + 0.6), sharex=True, squeeze=False)
+    for ax, (key, cols) in zip(axes[:, 0], groups.items()):
+        for c in cols:
+            y = history[c]
+            if key in ("energy", "casimir"):
+                ax.plot(t, y - y[0], label=f"{c} - {c}(0)")
+            else:
+                ax.plot(t, y, label=c)
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("t [s]")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int = 6, title: str = "") -> Path:
+    """Deformed centrelines at ``n_shapes`` times spread over the run, in 3-D and in
+    the two projections with the largest extent.
+
+    Parameters
+    ----------
+    times : (m,) array
+    shapes : (m, k, 3) array
+        Centreline points at each time.
+    """
+    plt = _pyplot()
+    idx = np.unique(np.linspace(0, len(times) - 1, min(n_shapes, len(times))).round().astype(int))
+    pts = shapes[idx]
+    ext = np.ptp(shapes.reshape(-1, 3), axis=0)
+    a, b = sorted(np.argsort(ext)[-2:])
+    fig = plt.figure(figsize=(11, 4.5))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 2, 2)
+    cmap = plt.get_cmap("viridis")
+    for j, (i, p) in enumerate(zip(idx, pts)):
+        col = cmap(j / max(1, len(idx) - 1))
+        ax3.plot(p[:, 0], p[:, 1], p[:, 2], color=col, label=f"t = {times[i]:.4g} s")
+        ax2.plot(p[:, a], p[:, b], color=col)
+    ax3.set_xlabel("x1"), ax3.set_ylabel("x2"), ax3.set_zlabel("x3")
+    ax3.legend(fontsize=7, loc="upper left")
+    ax2.set_xlabel(f"x{a + 1} [m]"), ax2.set_ylabel(f"x{b + 1} [m]")
+    ax2.set_aspect("equal", adjustable="datalim")
+    ax2.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
