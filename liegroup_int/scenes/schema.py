@@ -98,8 +98,10 @@ def _is_number(v) -> bool:
 def coerce(key: Key, value, where: str):
     """Check ``value`` against ``key.kind`` (and ``key.check``); return the clean value."""
 
+    raw = value
+
     def fail(expected: str):
-        raise SceneError(f"{where}: key '{key.name}' = {value!r}: expected {expected}")
+        raise SceneError(f"{where}: key '{key.name}' = {raw!r}: expected {expected}")
 
     k = key.kind
     if k == "float":

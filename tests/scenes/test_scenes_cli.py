@@ -1,0 +1,119 @@
+"""Scenes and the command line: loading, overrides, errors, outputs."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from liegroup_int.cli import main
+from liegroup_int.io import read_history
+from liegroup_int.scenes import SceneError, builtin_names, load_scene, parse_override
+
+RIGID = ["free_rigid_body", "heavy_top"]
+
+
+def test_builtins_listed(capsys):
+    assert set(RIGID + ["pendulum", "cantilever", "arch", "spinning_helix", "flying_spaghetti"]) <= set(builtin_names())
+    assert main(["scenes"]) == 0
+    out = capsys.readouterr().out
+    assert all(name in out for name in builtin_names())
+
+
+@pytest.mark.parametrize("name", builtin_names())
+def test_every_builtin_validates(name):
+    assert main(["validate", name]) == 0
+
+
+@pytest.mark.parametrize("text, key, value", [
+    ("integrator.dt=1e-4", "integrator.dt", 1e-4),
+    ("integrator.method=rkmk6", "integrator.method", "rkmk6"),
+    ("body.inertia=[1, 2, 2.5]", "body.inertia", [1, 2, 2.5]),
+    ("bc.start = hinged", "bc.start", "hinged"),
+])
+def test_parse_override(text, key, value):
+    assert parse_override(text) == (key, value)
+
+
+def test_run_writes_history_and_summary(tmp_path):
+    out = tmp_path / "run"
+    rc = main(["run", "heavy_top", "--out", str(out), "--quiet", "--set", "t_end=0.5", "--set", "output.every=0.1"])
+    assert rc == 0
+    hist = read_history(out / "history.csv")
+    np.testing.assert_allclose(hist["t"], [0.0, 0.1, 0.2, 0.3, 0.4, 0.5], atol=1e-12)
+    assert {"energy", "casimir", "orth_error"} <= set(hist)
+    s = json.loads((out / "summary.json").read_text())
+    assert s["scene"] == "heavy_top" and s["method"] == "rkmk4" and s["steps"] == 500
+    assert np.array(s["final"]["R"]).shape == (3, 3) and len(s["final"]["omega_body"]) == 3
+    # RKMK4 at h=1e-3 over 0.5 s: energy drift ~1e-12 relative
+    assert abs(hist["energy"][-1] - hist["energy"][0]) < 1e-9 * abs(hist["energy"][0])
+    assert (out / "history.png").exists()
+
+
+def test_beam_run_writes_tip_and_shapes(tmp_path):
+    out = tmp_path / "pend"
+    rc = main(["run", "pendulum", "--out", str(out), "--quiet", "--set", "t_end=0.01", "--set", "output.every=0.005"])
+    assert rc == 0
+    hist = read_history(out / "history.csv")
+    assert {"tip_x", "tip_y", "tip_z", "energy"} <= set(hist)
+    s = json.loads((out / "summary.json").read_text())
+    assert len(s["final"]["tip"]) == 3 and s["final"]["tip"][2] < 0  # falling under gravity
+    assert (out / "shapes.png").exists() and (out / "history.png").exists()
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["run", "no_such_scene"], "not a scene file and not a built-in"),
+    (["run", "heavy_top", "--set", "integrator.mthod=rkmk4"], "unknown key 'integrator.mthod'"),
+    (["run", "heavy_top", "--set", "integrator.dt=-1"], "'integrator.dt' = -1: expected a positive number"),
+    (["run", "heavy_top", "--set", "t_end=0"], "'t_end' = 0: expected a positive number"),
+    (["run", "heavy_top", "--set", "integrator.dt=20"], "expected a step <= t_end"),
+    (["run", "heavy_top", "--set", "integrator.method=rkmk9"], "integrator.method"),
+    (["run", "heavy_top", "--set", "body.inertia=[1, 1, 5]"], "triangle inequality"),
+    (["run", "pendulum", "--set", "space.n_ctrl=4"], "space.n_ctrl"),
+    (["run", "heavy_top", "--set", "integrator.rtol=1e-6"], "both given"),
+    (["run", "heavy_top", "--set", "oops"], "expected KEY=VALUE"),
+])
+def test_bad_input_is_one_line_exit_2(args, fragment, capsys, tmp_path):
+    rc = main(args + ["--out", str(tmp_path / "x")] if args[0] == "run" else args)
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert fragment in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_bad_toml_file(tmp_path, capsys):
+    f = tmp_path / "bad.toml"
+    f.write_text("t_end = [1,\n")
+    assert main(["validate", str(f)]) == 2
+    assert "invalid TOML" in capsys.readouterr().err
+
+
+def test_blow_up_exits_3_and_keeps_history(tmp_path, capsys):
+    # the cantilever at 1.1x its stable RK4 step (|lambda| h = 3.1 > 2.83) diverges; the
+    # divergence is caught (rotation guard or non-finite state) and the rows written
+    # before it stay on disk
+    out = tmp_path / "boom"
+    rc = main(["run", "cantilever", "--out", str(out), "--quiet", "--set", "integrator.dt=1.3e-6",
+               "--set", "t_end=0.01", "--set", "output.every=1.3e-5"])
+    err = capsys.readouterr().err
+    assert rc == 3 and ("non-finite" in err or "rotation increment" in err) and err.count("\n") == 1
+    hist = read_history(out / "history.csv")
+    assert len(hist["t"]) >= 2 and np.all(np.isfinite(hist["tip_z"]))
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "failed" and 0 < s["t_reached"] < 0.01
+
+
+def test_console_script_entry_point(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "liegroup_int", "run", "heavy_top", "--quiet", "--out", str(tmp_path / "h"),
+                        "--set", "t_end=0.01"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "heavy_top" in r.stdout
+
+
+def test_scene_file_with_override(tmp_path):
+    f = tmp_path / "mytop.toml"
+    f.write_text('problem = "rigid_body"\nt_end = 1.0\n[integrator]\ndt = 0.01\n[body]\ninertia = [1.0, 1.0, 1.5]\n')
+    sc = load_scene(f, {"integrator.method": "rkmk6"})
+    assert sc.name == "mytop" and sc.integrator.method == "rkmk6" and sc["body.inertia"] == (1.0, 1.0, 1.5)
+    with pytest.raises(SceneError, match="mytop.toml: key 'body.mass'"):
+        load_scene(f, {"body.mass": -1.0})
