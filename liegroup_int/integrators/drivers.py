@@ -218,7 +218,7 @@ def integrate_adaptive(
                 i_stop += 1
         else:
             stats.rejected += 1
-            fac = safety * err ** (-1.0 / k) if np.isfinite(err) else fac_min
+            fac = (safety * err ** (-1.0 / k) if err > 0 else 1.0) if np.isfinite(err) else fac_min
             if angle > max_increment_angle:
                 fac = min(fac, 0.5 * max_increment_angle / angle)
             h = h_try * min(1.0, max(fac_min, fac))

@@ -44,3 +44,24 @@ def test_fixed_step_order(method, reference):
     slope = fitted_order(hs, errs)
     # 0.3: the tolerance for a fit over three steps in the asymptotic range
     assert abs(slope - order) < 0.3, f"{method}: fitted order {slope:.3f}, errors {errs}"
+
+
+# the embedded pairs by their propagated weights, on the same problem; this checks the
+# weights as implemented in floating point, including the cancellation-safe stage sums
+# that Verner's pair (|a_ij| up to 208) needs. Verner's pair has small principal error
+# coefficients: in the range where its error is above round-off it is measured at
+# slope 7.0, so for the pairs the fit must reach at least the nominal order - 0.3.
+PAIR_CASES = {
+    "rkmk32": (3, [0.02, 0.01, 0.005]),
+    "rkmk45": (5, [0.04, 0.02, 0.01]),
+    "rkmk65": (6, [0.08, 0.04, 0.02]),
+}
+
+
+@pytest.mark.parametrize("method", sorted(PAIR_CASES))
+def test_pair_propagated_order(method, reference):
+    order, hs = PAIR_CASES[method]
+    errs = [np.abs(integrate(TOP.problem(), Y0, (0.0, T), method=method, dt=h).y_final - reference).max() for h in hs]
+    assert min(errs) > 1e-11, errs
+    slope = fitted_order(hs, errs)
+    assert order - 0.3 < slope < order + 1.3, f"{method}: fitted order {slope:.3f}, errors {errs}"
