@@ -26,7 +26,8 @@ def _parser() -> argparse.ArgumentParser:
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
-    sub.add_parser("scenes", help="list the built-in scenes")
+    sc = sub.add_parser("scenes", help="list the built-in scenes")
+    sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
     return p
 
 
@@ -44,6 +45,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         if args.command == "scenes":
+            if args.reference:
+                from .scenes.reference import schema_markdown
+
+                print(schema_markdown())
+                return 0
             for name, desc in builtin_descriptions().items():
                 print(f"{name:24s} {desc}")
             return 0

@@ -131,7 +131,7 @@ def register_kind(kind: ProblemKind) -> ProblemKind:
 def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Scene:
     """Validate flat ``given`` keys into a :class:`Scene` (raises :class:`SceneError`)."""
     kind_name = given.get("problem")
-    if kind_name not in KINDS:
+    if not isinstance(kind_name, str) or kind_name not in KINDS:
         valid = ", ".join(sorted(KINDS))
         raise SceneError(f"{source}: key 'problem' = {kind_name!r}: expected one of {valid}")
     kind = KINDS[kind_name]

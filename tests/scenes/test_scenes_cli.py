@@ -117,3 +117,12 @@ def test_scene_file_with_override(tmp_path):
     assert sc.name == "mytop" and sc.integrator.method == "rkmk6" and sc["body.inertia"] == (1.0, 1.0, 1.5)
     with pytest.raises(SceneError, match="mytop.toml: key 'body.mass'"):
         load_scene(f, {"body.mass": -1.0})
+
+
+def test_scene_reference_is_current(capsys):
+    from pathlib import Path
+
+    from liegroup_int.scenes.reference import schema_markdown
+
+    doc = Path(__file__).resolve().parents[2] / "docs" / "scenes.md"
+    assert doc.read_text().strip() == schema_markdown().strip(), "regenerate: liegroup-int scenes --reference > docs/scenes.md"
