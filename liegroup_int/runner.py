@@ -64,6 +64,21 @@ class Progress:
             self.bar.close()
 
 
+def stable_dt_hint(scene: Scene, sim) -> str:
+    """``stable dt estimate ...`` for problems with a spectral radius (beams), else ''."""
+    from .integrators import spectral_radius, stable_step
+    from .problems.beam import BeamProblem
+
+    if not isinstance(sim.problem, BeamProblem):
+        return ""
+    try:
+        lam = spectral_radius(sim.problem, 0.0, sim.y0)
+        step = stable_step(resolve_method(scene.integrator.method), lam, scene.t_end)
+    except Exception:  # the hint must never mask the original error
+        return ""
+    return f"stable dt estimate {step.dt:.3g} s (|lambda|max = {lam:.3g} 1/s, {step.rule})"
+
+
 def write_plots(out_dir: Path, scene: Scene, sim, history: Path) -> list[str]:
     """History PNG, and for problems that record shapes, a deformed-shape PNG (+ npz)."""
     from .io import plot_history, plot_shapes, read_history
@@ -100,9 +115,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
     spec = scene.integrator
     dt = spec.dt
     if dt == "auto":
-        dt = sim.info.get("dt_auto")
-        if dt is None:
-            raise SceneError(f"{scene.source}: key 'integrator.dt' = 'auto': automatic steps are available for beam scenes only")
+        dt = sim.info["dt_auto"]
     tab = resolve_method(spec.method)
     t_out = output_times(scene, dt)
     history = out_dir / "history.csv"
@@ -141,6 +154,9 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
             )
     except IntegrationError as exc:
         status, error = "failed", f"{scene.name}: {exc}"
+        hint = stable_dt_hint(scene, sim)
+        if hint:
+            error += f"; {hint}"
         stats = None
         t_reached = exc.t
     finally:

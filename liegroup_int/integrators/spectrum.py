@@ -37,8 +37,8 @@ def eigenvalues(problem: Problem, t: float, y) -> np.ndarray:
     return np.linalg.eigvals(jacobian(problem, t, y))
 
 
-def spectral_radius(problem: Problem, t: float, y, iterations: int = 60, seed: int = 0,
-                    eps: float = 1e-7) -> float:
+def spectral_radius(problem: Problem, t: float, y, iterations: int = 200, seed: int = 0,
+                    eps: float = 1e-7, rtol: float = 1e-7) -> float:
     """Largest ``|lambda|`` of the linearized increment map by power iteration on
     finite-difference Jacobian-vector products (two rate evaluations per iteration).
 
@@ -63,7 +63,7 @@ def spectral_radius(problem: Problem, t: float, y, iterations: int = 60, seed: i
         if rho_new == 0.0:
             return 0.0
         x = x2 / rho_new
-        if abs(rho_new - rho) <= 1e-4 * rho_new:
+        if abs(rho_new - rho) <= rtol * rho_new:
             rho = rho_new
             break
         rho = rho_new

@@ -231,6 +231,20 @@ class ShapeRecorder:
         self.c.append(y.c.copy())
 
 
+def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
+    """``integrator.dt = "auto"``: spectral radius at the initial state times the method's
+    imaginary-axis stability limit, with a safety factor (integrators/stepsize.py)."""
+    import sys
+
+    from ..integrators import resolve_method, spectral_radius, stable_step
+
+    lam = spectral_radius(pb, 0.0, y0)
+    step = stable_step(resolve_method(scene.integrator.method), lam, scene.t_end)
+    if step.warning:
+        print(f"warning: {scene.source}: {step.warning}", file=sys.stderr)
+    return {"dt_auto": step.dt, "lambda_max": lam, "lambda_dt": step.y, "dt_rule": step.rule}
+
+
 def build(scene: Scene) -> Simulation:
     pb = problem(scene)
     y0 = pb.initial_state()
@@ -238,7 +252,11 @@ def build(scene: Scene) -> Simulation:
     def final_state(y):
         return {"tip": pb.tip(y).tolist(), "energy": pb.energy(y), "orth_error": pb.orth_error(y)}
 
+    info = {}
+    if scene.integrator.dt == "auto":
+        info.update(auto_step(scene, pb, y0))
     info = {
+        **info,
         "discretization": {"degree": scene["space.degree"], "n_ctrl": scene["space.n_ctrl"],
                            "length": pb.space.length, "C_star": 4.0},
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},

@@ -33,6 +33,8 @@ def _body(scene: Scene) -> RigidBody:
 
 def check(scene: Scene) -> None:
     _body(scene)
+    if scene.integrator.dt == "auto":
+        raise SceneError(f"{scene.source}: key 'integrator.dt' = 'auto': automatic steps are available for beam scenes only")
 
 
 def build(scene: Scene) -> Simulation:

@@ -1,0 +1,607 @@
+"""Compiled (numba) kernels of the beam plugin: ``BeamProblem(..., backend="numba")``.
+
+Same mathematics as the NumPy path of :mod:`.problem` and :mod:`.kinematics`, fused into
+one loop over the collocation points per call:
+
+* :func:`action_kernel`: ``theta, theta_s, theta_ss`` at the collocation points from the
+  control values (banded ``N0, N1, N2``), ``R <- exp(hat(theta)) R``, the curvature update
+  (eqs. 52-53 of method.md section 1: ``K' = K + R^T J_r theta_s`` and its s-derivative,
+  with ``B1 = B'/t`` and ``C1 = C'/t``), ``c, v, w`` plus their increments.
+* :func:`rates_kernel`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains,
+  resultants, balance residuals, enhanced-collocation terms at Neumann ends, ``dexpinv``,
+  Dirichlet rows set to zero, then the ``M_c`` solve of all 12 columns in place.
+* :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
+
+SO(3) coefficients use the branch logic of :mod:`liegroup_int.groups.so3_coefficients`:
+the 12-term Horner polynomial in ``theta**2`` with the same float coefficients
+(``TAYLOR`` tables, passed in at run time, not frozen into the cached machine code) below
+``TAYLOR_THRESHOLD`` (1 rad), the same closed forms at and above it.
+
+Banded storage. ``N0, N1, N2`` are stored as ``(3, n, W)`` band rows with one start
+column ``j0[i]`` per row (``W = lower + upper + 1`` of the union of their non-zero
+patterns, windows clamped inside ``[0, n)``); the construction checks that the bands
+reproduce the dense matrices exactly.
+
+``M_c`` solve. ``M_c = N0`` is the collocation matrix of the (rational) B-spline basis at
+the Greville abscissae: totally positive (Karlin; for NURBS ``diag(1/W(u_i)) N diag(w_j)``
+with positive weights stays totally positive), so Gaussian elimination *without*
+pivoting exists, produces non-negative ``L`` and ``U`` and is backward stable because
+``|L||U| = |L U| = M_c`` (de Boor & Pinkus, Linear Algebra Appl. 17, 1977). It is
+factored once, in band form without fill-in; the factorization is checked (positive
+pivots, non-negative factors up to round-off, small residual against the dense matrix)
+and the dense inverse is used instead if a check fails. The solve costs
+``12 n (lower + upper + 1)`` multiply-adds, linear in ``n``. A precomputed dense inverse
+(``12 n^2``) is available too (``solver="dense"``); ``solver="auto"`` uses it only for
+``n <= DENSE_MAX_N`` (measured: the banded solve is never slower at ``p = 4``, see
+``benchmarks/beam_backends.py``).
+
+Data passing. A numba call costs ~0.12 us per array argument on top of ~0.3 us, so all
+constant data (section constants, loads, series tables, reference strains/curvatures,
+band matrices, LU factors, end data) live in one float array ``sf`` and one int array
+``si`` with the offsets of :class:`NumbaBeamKernels` (``_H_*`` header slots). The end
+force and couple (already multiplied by their time profiles) sit in ``sf`` too; the
+Python wrapper rewrites them once per distinct stage time when a profile is not constant.
+
+State arrays must be float64; C-contiguous arrays use the fast compiled specialization.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...groups.so3_coefficients import N_TERMS, TAYLOR, TAYLOR_THRESHOLD
+
+#: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
+#: Measured (p = 4, this machine): the banded LU solve is faster from n = 8 on, and the
+#: dense product only ties below; 0 would do as well. Kept so that tiny systems skip
+#: the band bookkeeping.
+DENSE_MAX_N = 8
+
+_SERIES_KEYS = ("A", "B", "C", "D", "B1", "C1")
+_IA, _IB, _IC, _ID, _IB1, _IC1 = range(6)
+
+# ---- layout of the int array ``si`` (header) -----------------------------------------
+_H_N, _H_W, _H_L, _H_U, _H_DENSE, _H_NE = 0, 1, 2, 3, 4, 5
+_H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0 = range(6, 15)
+_HEADER = 16
+# ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
+# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold
+_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR = 0, 3, 6, 9, 10, 13, 16, 17, 18
+_N_PRM = 19
+# per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
+# floats (normal, factor, force(3), couple(3))
+_NEI, _NEF = 5, 8
+
+
+# ====================================================================== scalar helpers
+@njit(cache=True, fastmath=False, inline="always")
+def _horner(ser, k, t2):
+    m = ser.shape[1]
+    out = ser[k, m - 1]
+    for j in range(m - 2, -1, -1):
+        out = out * t2 + ser[k, j]
+    return out
+
+
+@njit(cache=True, fastmath=False)
+def _coef_ABCB1C1(t, ser, thr):
+    """``(A, B, C, B1, C1)`` at the angle ``t`` (series below ``thr``, closed form above)."""
+    if t < thr:
+        t2 = t * t
+        return (_horner(ser, _IA, t2), _horner(ser, _IB, t2), _horner(ser, _IC, t2),
+                _horner(ser, _IB1, t2), _horner(ser, _IC1, t2))
+    s, co = math.sin(t), math.cos(t)
+    sh = math.sin(0.5 * t) / t
+    return (s / t, 2.0 * sh * sh, (t - s) / t ** 3.0,
+            (t * s + 2.0 * co - 2.0) / t ** 4.0, (3.0 * s - 2.0 * t - t * co) / t ** 5.0)
+
+
+@njit(cache=True, fastmath=False)
+def _coef_D(t, ser, thr):
+    """``D = (1 - (t/2) cot(t/2)) / t^2`` (dexpinv), same branches."""
+    if t < thr:
+        return _horner(ser, _ID, t * t)
+    return (1.0 - 0.5 * t / math.tan(0.5 * t)) / t ** 2.0
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _cross(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+# ====================================================================== data views
+@njit(cache=True, fastmath=False, inline="always")
+def _views(sf, si):
+    n, W = si[_H_N], si[_H_W]
+    nlu = si[_H_L] + si[_H_U] + 1
+    ne = si[_H_NE]
+    prm = sf[si[_H_PRM]:si[_H_PRM] + _N_PRM]
+    ser = sf[si[_H_SER]:si[_H_SER] + 6 * N_TERMS].reshape((6, N_TERMS))
+    geo = sf[si[_H_GEO]:si[_H_GEO] + 9 * n].reshape((n, 9))
+    band = sf[si[_H_BAND]:si[_H_BAND] + 3 * n * W].reshape((3, n, W))
+    lu = sf[si[_H_LU]:si[_H_LU] + n * nlu].reshape((n, nlu))
+    nm = n if si[_H_DENSE] != 0 else 0
+    minv = sf[si[_H_MINV]:si[_H_MINV] + nm * nm].reshape((nm, nm))
+    endf = sf[si[_H_ENDF]:si[_H_ENDF] + _NEF * ne].reshape((ne, _NEF))
+    endi = si[si[_H_ENDI]:si[_H_ENDI] + _NEI * ne].reshape((ne, _NEI))
+    j0 = si[si[_H_J0]:si[_H_J0] + n]
+    return prm, ser, geo, band, lu, minv, endf, endi, j0
+
+
+# ====================================================================== M_c solve
+@njit(cache=True, fastmath=False)
+def band_lu_nopivot(ab, lower, upper):
+    """In-place banded LU without pivoting of ``ab[i, lower + j - i] = M[i, j]``.
+
+    Afterwards the strictly lower part holds the multipliers of the unit lower factor
+    ``L`` and the rest ``U``. No fill-in (no row exchanges). Returns the smallest pivot.
+    """
+    n = ab.shape[0]
+    pmin = np.inf
+    for k in range(n):
+        piv = ab[k, lower]
+        if abs(piv) < pmin:
+            pmin = abs(piv)
+        for i in range(k + 1, min(n, k + lower + 1)):
+            m = ab[i, lower + k - i] / piv
+            ab[i, lower + k - i] = m
+            for j in range(k + 1, min(n, k + upper + 1)):
+                ab[i, lower + j - i] -= m * ab[k, lower + j - k]
+    return pmin
+
+
+@njit(cache=True, fastmath=False)
+def _solve_inplace(x, lu, lower, upper, minv, dense):
+    """``x[f, :, d] <- M_c^-1 x[f, :, d]`` for the 12 columns of ``x`` ``(4, n, 3)``."""
+    n = x.shape[1]
+    if dense:
+        b = x.copy()
+        for i in range(n):
+            for f in range(4):
+                for d in range(3):
+                    acc = 0.0
+                    for j in range(n):
+                        acc += minv[i, j] * b[f, j, d]
+                    x[f, i, d] = acc
+        return
+    # forward: unit lower L
+    for i in range(1, n):
+        for j in range(max(0, i - lower), i):
+            m = lu[i, lower + j - i]
+            if m != 0.0:
+                for f in range(4):
+                    for d in range(3):
+                        x[f, i, d] -= m * x[f, j, d]
+    # backward: upper U
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, min(n, i + upper + 1)):
+            m = lu[i, lower + j - i]
+            if m != 0.0:
+                for f in range(4):
+                    for d in range(3):
+                        x[f, i, d] -= m * x[f, j, d]
+        piv = lu[i, lower]
+        for f in range(4):
+            for d in range(3):
+                x[f, i, d] /= piv
+
+
+@njit(cache=True, fastmath=False)
+def solve_kernel(x, sf, si):
+    """Public wrapper of the in-place ``M_c`` solve (tests, benchmarks)."""
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    _solve_inplace(x, lu, si[_H_L], si[_H_U], minv, si[_H_DENSE] != 0)
+
+
+# ====================================================================== action
+@njit(cache=True, fastmath=False)
+def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
+    """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2, Ks2``."""
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    n, W = c.shape[0], band.shape[2]
+    thr = prm[_P_THR]
+    for i in range(n):
+        for d in range(3):
+            c2[i, d] = c[i, d] + u[0, i, d]
+            v2[i, d] = v[i, d] + u[2, i, d]
+            w2[i, d] = w[i, d] + u[3, i, d]
+        # theta and its s-derivatives at the collocation point
+        t0 = t1 = t2 = s0 = s1 = s2 = q0 = q1 = q2 = 0.0
+        js = j0[i]
+        for k in range(W):
+            j = js + k
+            b0, b1, b2 = band[0, i, k], band[1, i, k], band[2, i, k]
+            x0, x1, x2 = u[1, j, 0], u[1, j, 1], u[1, j, 2]
+            t0 += b0 * x0
+            t1 += b0 * x1
+            t2 += b0 * x2
+            s0 += b1 * x0
+            s1 += b1 * x1
+            s2 += b1 * x2
+            q0 += b2 * x0
+            q1 += b2 * x1
+            q2 += b2 * x2
+        ang = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        cA, cB, cC, cB1, cC1 = _coef_ABCB1C1(ang, ser, thr)
+        # exp(hat(theta)) = I + A X + B X X
+        xx, yy, zz = t0, t1, t2
+        e00 = 1.0 + cB * (-zz * zz - yy * yy)
+        e11 = 1.0 + cB * (-zz * zz - xx * xx)
+        e22 = 1.0 + cB * (-yy * yy - xx * xx)
+        e01 = cA * -zz + cB * (xx * yy)
+        e10 = cA * zz + cB * (xx * yy)
+        e02 = cA * yy + cB * (xx * zz)
+        e20 = cA * -yy + cB * (xx * zz)
+        e12 = cA * -xx + cB * (yy * zz)
+        e21 = cA * xx + cB * (yy * zz)
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        R2[i, 0, 0] = e00 * r00 + e01 * r10 + e02 * r20
+        R2[i, 0, 1] = e00 * r01 + e01 * r11 + e02 * r21
+        R2[i, 0, 2] = e00 * r02 + e01 * r12 + e02 * r22
+        R2[i, 1, 0] = e10 * r00 + e11 * r10 + e12 * r20
+        R2[i, 1, 1] = e10 * r01 + e11 * r11 + e12 * r21
+        R2[i, 1, 2] = e10 * r02 + e11 * r12 + e12 * r22
+        R2[i, 2, 0] = e20 * r00 + e21 * r10 + e22 * r20
+        R2[i, 2, 1] = e20 * r01 + e21 * r11 + e22 * r21
+        R2[i, 2, 2] = e20 * r02 + e21 * r12 + e22 * r22
+        # g = J_r(theta) theta_s and g_s = d/ds g (kinematics.jr_and_derivative)
+        tt = t0 * s0 + t1 * s1 + t2 * s2
+        tg0, tg1, tg2 = _cross(t0, t1, t2, s0, s1, s2)
+        ttg0, ttg1, ttg2 = _cross(t0, t1, t2, tg0, tg1, tg2)
+        ts0, ts1, ts2 = _cross(t0, t1, t2, q0, q1, q2)
+        a0, a1, a2 = _cross(s0, s1, s2, tg0, tg1, tg2)
+        b0_, b1_, b2_ = _cross(t0, t1, t2, ts0, ts1, ts2)
+        g0 = s0 - cB * tg0 + cC * ttg0
+        g1 = s1 - cB * tg1 + cC * ttg1
+        g2 = s2 - cB * tg2 + cC * ttg2
+        h0 = q0 - cB1 * tt * tg0 - cB * ts0 + cC1 * tt * ttg0 + cC * (a0 + b0_)
+        h1 = q1 - cB1 * tt * tg1 - cB * ts1 + cC1 * tt * ttg1 + cC * (a1 + b1_)
+        h2 = q2 - cB1 * tt * tg2 - cB * ts2 + cC1 * tt * ttg2 + cC * (a2 + b2_)
+        # x = R^T g, x_s = R^T g_s (old R); K' = K + x, K_s' = K_s - K x x + x_s
+        x0 = r00 * g0 + r10 * g1 + r20 * g2
+        x1 = r01 * g0 + r11 * g1 + r21 * g2
+        x2 = r02 * g0 + r12 * g1 + r22 * g2
+        y0 = r00 * h0 + r10 * h1 + r20 * h2
+        y1 = r01 * h0 + r11 * h1 + r21 * h2
+        y2 = r02 * h0 + r12 * h1 + r22 * h2
+        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
+        kx0, kx1, kx2 = _cross(k0, k1, k2, x0, x1, x2)
+        K2[i, 0] = k0 + x0
+        K2[i, 1] = k1 + x1
+        K2[i, 2] = k2 + x2
+        Ks2[i, 0] = Ks[i, 0] - kx0 + y0
+        Ks2[i, 1] = Ks[i, 1] - kx1 + y1
+        Ks2[i, 2] = Ks[i, 2] - kx2 + y2
+
+
+# ====================================================================== stage rates
+@njit(cache=True, fastmath=False)
+def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
+    """Stage rate ``k = M_c^-1 rhs`` into ``out`` ``(4, n, 3)`` (problem._rates + _solve).
+
+    ``u`` is the stage increment (its rotational component gives ``theta_c`` for
+    ``dexpinv``); pass zeros for the plain vector field.
+    """
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
+    CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
+    CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
+    J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
+    mu = prm[_P_MU]
+    qx, qy, qz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]
+    mx, my, mz = prm[_P_M], prm[_P_M + 1], prm[_P_M + 2]
+    has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
+    thr = prm[_P_THR]
+    for i in range(n):
+        cs0 = cs1 = cs2 = css0 = css1 = css2 = 0.0
+        vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
+        js = j0[i]
+        for k in range(W):
+            j = js + k
+            b0, b1, b2 = band[0, i, k], band[1, i, k], band[2, i, k]
+            x0, x1, x2 = c[j, 0], c[j, 1], c[j, 2]
+            cs0 += b1 * x0
+            cs1 += b1 * x1
+            cs2 += b1 * x2
+            css0 += b2 * x0
+            css1 += b2 * x1
+            css2 += b2 * x2
+            vc0 += b0 * v[j, 0]
+            vc1 += b0 * v[j, 1]
+            vc2 += b0 * v[j, 2]
+            wc0 += b0 * w[j, 0]
+            wc1 += b0 * w[j, 1]
+            wc2 += b0 * w[j, 2]
+            th0 += b0 * u[1, j, 0]
+            th1 += b0 * u[1, j, 1]
+            th2 += b0 * u[1, j, 2]
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
+        # strains (kinematics.strains)
+        rc0 = r00 * cs0 + r10 * cs1 + r20 * cs2
+        rc1 = r01 * cs0 + r11 * cs1 + r21 * cs2
+        rc2 = r02 * cs0 + r12 * cs1 + r22 * cs2
+        ga0, ga1, ga2 = rc0 - geo[i, 0], rc1 - geo[i, 1], rc2 - geo[i, 2]
+        kr0, kr1, kr2 = _cross(k0, k1, k2, rc0, rc1, rc2)
+        gs0 = (r00 * css0 + r10 * css1 + r20 * css2) - kr0
+        gs1 = (r01 * css0 + r11 * css1 + r21 * css2) - kr1
+        gs2 = (r02 * css0 + r12 * css1 + r22 * css2) - kr2
+        km0, km1, km2 = k0 - geo[i, 3], k1 - geo[i, 4], k2 - geo[i, 5]
+        kms0, kms1, kms2 = Ks[i, 0] - geo[i, 6], Ks[i, 1] - geo[i, 7], Ks[i, 2] - geo[i, 8]
+        # resultants (material frame)
+        N0_, N1_, N2_ = CN0 * ga0, CN1 * ga1, CN2 * ga2
+        M0_, M1_, M2_ = CM0 * km0, CM1 * km1, CM2 * km2
+        # n_s = R (K x N + CN Gamma_s)
+        a0, a1, a2 = _cross(k0, k1, k2, N0_, N1_, N2_)
+        a0 += CN0 * gs0
+        a1 += CN1 * gs1
+        a2 += CN2 * gs2
+        ns0 = r00 * a0 + r01 * a1 + r02 * a2
+        ns1 = r10 * a0 + r11 * a1 + r12 * a2
+        ns2 = r20 * a0 + r21 * a1 + r22 * a2
+        # tq = -Om x (J Om) + K x M + CM KM_s + (R^T c_s) x N
+        om0 = r00 * wc0 + r10 * wc1 + r20 * wc2
+        om1 = r01 * wc0 + r11 * wc1 + r21 * wc2
+        om2 = r02 * wc0 + r12 * wc1 + r22 * wc2
+        p0, p1, p2 = _cross(om0, om1, om2, J0 * om0, J1 * om1, J2 * om2)
+        e0, e1, e2 = _cross(k0, k1, k2, M0_, M1_, M2_)
+        f0, f1, f2 = _cross(rc0, rc1, rc2, N0_, N1_, N2_)
+        tq0 = -p0 + e0 + CM0 * kms0 + f0
+        tq1 = -p1 + e1 + CM1 * kms1 + f1
+        tq2 = -p2 + e2 + CM2 * kms2 + f2
+        if has_q:
+            ns0 += qx
+            ns1 += qy
+            ns2 += qz
+        if has_m:
+            tq0 += r00 * mx + r10 * my + r20 * mz
+            tq1 += r01 * mx + r11 * my + r21 * mz
+            tq2 += r02 * mx + r12 * my + r22 * mz
+        # enhanced collocation at Neumann ends
+        for e in range(ne):
+            if endi[e, 0] != i:
+                continue
+            nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 3] != 0:
+                rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
+                rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
+                rn2 = r20 * N0_ + r21 * N1_ + r22 * N2_
+                ns0 += fac * (endf[e, 2] - nrm * rn0)
+                ns1 += fac * (endf[e, 3] - nrm * rn1)
+                ns2 += fac * (endf[e, 4] - nrm * rn2)
+            if endi[e, 4] != 0:
+                m0, m1, m2 = endf[e, 5], endf[e, 6], endf[e, 7]
+                mc0 = r00 * m0 + r10 * m1 + r20 * m2
+                mc1 = r01 * m0 + r11 * m1 + r21 * m2
+                mc2 = r02 * m0 + r12 * m1 + r22 * m2
+                tq0 += fac * (mc0 - nrm * M0_)
+                tq1 += fac * (mc1 - nrm * M1_)
+                tq2 += fac * (mc2 - nrm * M2_)
+        # right-hand sides
+        out[0, i, 0], out[0, i, 1], out[0, i, 2] = vc0, vc1, vc2
+        ang = math.sqrt(th0 * th0 + th1 * th1 + th2 * th2)
+        cD = _coef_D(ang, ser, thr)
+        xv0, xv1, xv2 = _cross(th0, th1, th2, wc0, wc1, wc2)
+        xx0, xx1, xx2 = _cross(th0, th1, th2, xv0, xv1, xv2)
+        out[1, i, 0] = wc0 - 0.5 * xv0 + cD * xx0
+        out[1, i, 1] = wc1 - 0.5 * xv1 + cD * xx1
+        out[1, i, 2] = wc2 - 0.5 * xv2 + cD * xx2
+        out[2, i, 0], out[2, i, 1], out[2, i, 2] = ns0 / mu, ns1 / mu, ns2 / mu
+        z0, z1, z2 = tq0 / J0, tq1 / J1, tq2 / J2
+        out[3, i, 0] = r00 * z0 + r01 * z1 + r02 * z2
+        out[3, i, 1] = r10 * z0 + r11 * z1 + r12 * z2
+        out[3, i, 2] = r20 * z0 + r21 * z1 + r22 * z2
+    # Dirichlet rows: prescribed (zero) rates before the solve (method.md section 3)
+    for e in range(ne):
+        i = endi[e, 0]
+        for d in range(3):
+            if endi[e, 1] != 0:
+                out[0, i, d] = 0.0
+                out[2, i, d] = 0.0
+            if endi[e, 2] != 0:
+                out[1, i, d] = 0.0
+                out[3, i, d] = 0.0
+    _solve_inplace(out, lu, si[_H_L], si[_H_U], minv, si[_H_DENSE] != 0)
+
+
+@njit(cache=True, fastmath=False)
+def rotation_angle_kernel(u, sf, si):
+    """``max_i |(N0 u[1])_i|``."""
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    n, W = u.shape[1], band.shape[2]
+    best = 0.0
+    for i in range(n):
+        t0 = t1 = t2 = 0.0
+        js = j0[i]
+        for k in range(W):
+            b0 = band[0, i, k]
+            t0 += b0 * u[1, js + k, 0]
+            t1 += b0 * u[1, js + k, 1]
+            t2 += b0 * u[1, js + k, 2]
+        a = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        if a > best or a != a:  # propagate NaN like np.max
+            best = a
+            if a != a:
+                return a
+    return best
+
+
+# ====================================================================== Python side
+def _band_layout(mats, n):
+    """Union band widths of ``mats`` and the clamped window starts ``j0``."""
+    nz = np.zeros((n, n), dtype=bool)
+    for m in mats:
+        nz |= m != 0.0
+    i, j = np.nonzero(nz)
+    lo = int(max(0, np.max(i - j))) if i.size else 0
+    hi = int(max(0, np.max(j - i))) if i.size else 0
+    W = min(lo + hi + 1, n)
+    j0 = np.clip(np.arange(n) - lo, 0, n - W).astype(np.int64)
+    bands = np.zeros((len(mats), n, W))
+    rows = np.arange(n)[:, None]
+    cols = j0[:, None] + np.arange(W)[None, :]
+    for k, m in enumerate(mats):
+        bands[k] = m[rows, cols]
+        back = np.zeros((n, n))
+        back[rows, cols] = bands[k]
+        if not np.array_equal(back, m):  # pragma: no cover - structural guarantee
+            raise AssertionError("band extraction lost non-zero entries")
+    return bands, j0
+
+
+def _factor_mc(N0, lower, upper):
+    """Banded LU without pivoting of ``M_c``; ``None`` if a stability check fails."""
+    n = N0.shape[0]
+    ab = np.zeros((n, lower + upper + 1))
+    for i in range(n):
+        for j in range(max(0, i - lower), min(n, i + upper + 1)):
+            ab[i, lower + j - i] = N0[i, j]
+    pmin = band_lu_nopivot(ab, lower, upper)
+    scale = float(np.max(np.abs(N0)))
+    if not (np.all(np.isfinite(ab)) and pmin > 1e-8 * scale):
+        return None
+    # totally positive M_c: L and U are non-negative (up to round-off)
+    if np.min(ab) < -1e-12 * max(1.0, float(np.max(np.abs(ab)))):
+        return None
+    # residual of the factorization: |L U - M_c| small against |M_c|
+    L = np.eye(n)
+    U = np.zeros((n, n))
+    for i in range(n):
+        for j in range(max(0, i - lower), min(n, i + upper + 1)):
+            if j < i:
+                L[i, j] = ab[i, lower + j - i]
+            else:
+                U[i, j] = ab[i, lower + j - i]
+    if np.max(np.abs(L @ U - N0)) > 1e-13 * scale * n:
+        return None
+    return ab
+
+
+class NumbaBeamKernels:
+    """Constant data and thin wrappers of the compiled kernels for one :class:`BeamProblem`.
+
+    Parameters
+    ----------
+    pb : BeamProblem
+        The problem (its NumPy-side set-up is read once).
+    solver : {"auto", "banded", "dense"}
+        ``M_c`` solve: banded LU without pivoting (``12 n (l + u + 1)`` per stage), the
+        dense inverse (``12 n^2``), or ``auto`` (dense only for ``n <= DENSE_MAX_N``).
+    """
+
+    def __init__(self, pb, solver: str = "auto"):
+        if solver not in ("auto", "banded", "dense"):
+            raise ValueError(f"solver must be 'auto', 'banded' or 'dense', got {solver!r}")
+        self.pb = pb
+        n = pb.n
+        self.n = n
+        lower, upper = pb.space.bandwidths
+        N0 = np.asarray(pb.N0, dtype=float)
+        ab = None
+        if solver != "dense":
+            ab = _factor_mc(N0, lower, upper)
+        dense = solver == "dense" or ab is None or (solver == "auto" and n <= DENSE_MAX_N)
+        self.solver = "dense" if dense else "banded"
+        if ab is None:
+            ab = np.zeros((n, lower + upper + 1))
+        minv = np.linalg.inv(N0) if dense else np.zeros(0)
+        bands, j0 = _band_layout([N0, np.asarray(pb.N1, float), np.asarray(pb.N2, float)], n)
+        self.bandwidth = bands.shape[2]
+
+        prm = np.zeros(_N_PRM)
+        prm[_P_CN:_P_CN + 3] = pb.CN
+        prm[_P_CM:_P_CM + 3] = pb.CM
+        prm[_P_JM:_P_JM + 3] = pb.Jm
+        prm[_P_MU] = pb.mu
+        prm[_P_Q:_P_Q + 3] = pb.q
+        prm[_P_M:_P_M + 3] = pb.m_dist
+        prm[_P_HASQ] = float(pb.has_q)
+        prm[_P_HASM] = float(pb.has_m)
+        prm[_P_THR] = float(TAYLOR_THRESHOLD)
+        ser = np.array([[float(x) for x in TAYLOR[k]] for k in _SERIES_KEYS])
+        if pb.curved:
+            geo = np.concatenate([pb.gamma0, pb.K0, pb.K0_s], axis=1)
+        else:  # the NumPy path does not subtract K0, K0_s (zero up to round-off) here
+            geo = np.concatenate([pb.gamma0, np.zeros((n, 6))], axis=1)
+
+        ends = pb.ends
+        ne = len(ends)
+        endi = np.zeros((ne, _NEI), dtype=np.int64)
+        endf = np.zeros((ne, _NEF))
+        self._profiles = []  # (row, slice, base vector, profile) of non-constant loads
+        for k, e in enumerate(ends):
+            endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann)
+            endf[k, 0], endf[k, 1] = e.normal, e.factor
+            ld = e.load
+            for sl, vec, prof, on in ((slice(2, 5), ld.force, ld.force_profile, e.force_neumann),
+                                      (slice(5, 8), ld.couple, ld.couple_profile, e.moment_neumann)):
+                vec = np.asarray(vec, dtype=float)
+                if not (on and np.any(vec)):
+                    continue
+                if prof.is_constant:
+                    endf[k, sl] = vec * prof(0.0)
+                else:
+                    self._profiles.append((k, sl, vec, prof))
+
+        blocks = [("prm", prm), ("ser", ser), ("geo", geo), ("band", bands), ("lu", ab),
+                  ("minv", minv), ("endf", endf)]
+        offs, pos = {}, 0
+        for name, arr in blocks:
+            offs[name] = pos
+            pos += arr.size
+        sf = np.empty(pos)
+        for name, arr in blocks:
+            sf[offs[name]:offs[name] + arr.size] = np.ascontiguousarray(arr, dtype=float).ravel()
+        si = np.zeros(_HEADER + endi.size + n, dtype=np.int64)
+        si[_H_N], si[_H_W], si[_H_L], si[_H_U] = n, bands.shape[2], lower, upper
+        si[_H_DENSE], si[_H_NE] = int(dense), ne
+        si[_H_PRM], si[_H_SER], si[_H_GEO], si[_H_BAND] = offs["prm"], offs["ser"], offs["geo"], offs["band"]
+        si[_H_LU], si[_H_MINV], si[_H_ENDF] = offs["lu"], offs["minv"], offs["endf"]
+        si[_H_ENDI], si[_H_J0] = _HEADER, _HEADER + endi.size
+        si[_HEADER:_HEADER + endi.size] = endi.ravel()
+        si[_HEADER + endi.size:] = j0
+        self.sf, self.si = sf, si
+        self._endf = sf[offs["endf"]:offs["endf"] + endf.size].reshape(endf.shape)  # view
+        self._t_loads = None
+        self._zero = np.zeros((4, n, 3))
+
+    # ------------------------------------------------------------------ wrappers
+    def _set_loads(self, t: float) -> None:
+        """End loads times their profiles at ``t`` (once per distinct stage time)."""
+        if t == self._t_loads:
+            return
+        for k, sl, vec, prof in self._profiles:
+            self._endf[k, sl] = vec * prof(t)
+        self._t_loads = t
+
+    def action(self, u, y, state_cls):
+        n, e = self.n, np.empty
+        c, v, w, K, Ks, R = e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3, 3))
+        action_kernel(u, y.c, y.v, y.w, y.R, y.K, y.K_s, c, v, w, R, K, Ks, self.sf, self.si)
+        return state_cls(c, v, w, R, K, Ks)
+
+    def increment_rate(self, t, y, u):
+        if self._profiles:
+            self._set_loads(t)
+        out = np.empty((4, self.n, 3))
+        rates_kernel(y.c, y.v, y.w, y.R, y.K, y.K_s, u, self.sf, self.si, out)
+        return out
+
+    def vector_field(self, t, y):
+        return self.increment_rate(t, y, self._zero)
+
+    def rotation_angle(self, u) -> float:
+        return float(rotation_angle_kernel(u, self.sf, self.si))
+
+    def solve(self, x):
+        """``M_c^-1`` on an increment-shaped array ``(4, n, 3)`` (copy)."""
+        x = np.array(x, dtype=float, copy=True)
+        solve_kernel(x, self.sf, self.si)
+        return x
