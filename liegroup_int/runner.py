@@ -150,7 +150,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
             t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (0.0, scene.t_end), sim.y0, dt, observer, t_out, progress)
         else:
             t_reached, y_final, stats = integrate_adaptive(
-                sim.problem, tab, (0.0, scene.t_end), sim.y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out, progress
+                sim.problem, tab, (0.0, scene.t_end), sim.y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out, progress,
+                h_max=sim.info.get("dt_auto", np.inf),
             )
     except IntegrationError as exc:
         status, error = "failed", f"{scene.name}: {exc}"

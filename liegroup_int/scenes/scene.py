@@ -111,7 +111,7 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("problem", "str", REQUIRED, "problem kind", choices=tuple(sorted(KINDS))),
         Key("t_end", "float", REQUIRED, "simulated time span", "s", positive),
         Key("integrator.method", "str", "rkmk4", "RKMK method", choices=method_names),
-        Key("integrator.dt", "float_or_auto", None, 'fixed step, or "auto" (beam scenes)', "s", positive),
+        Key("integrator.dt", "float_or_auto", None, 'fixed step; "auto" (beams: stable step); "none" to use rtol/atol', "s", positive),
         Key("integrator.rtol", "float", None, "relative tolerance (adaptive pairs)", "", positive),
         Key("integrator.atol", "float", None, "absolute tolerance (adaptive pairs)", "", positive),
         Key("output.every", "float", None, "simulated time between recorded rows (default t_end/200)", "s", positive),

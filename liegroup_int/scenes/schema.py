@@ -111,8 +111,10 @@ def coerce(key: Key, value, where: str):
     elif k == "float_or_auto":
         if value == "auto":
             return value
+        if value == "none":
+            return None
         if not _is_number(value):
-            fail('a finite number or "auto"')
+            fail('a finite number, "auto", or "none" (adaptive stepping with rtol/atol)')
         value = float(value)
     elif k == "int":
         if isinstance(value, bool) or not isinstance(value, int):

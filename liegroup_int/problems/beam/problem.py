@@ -94,11 +94,14 @@ class BeamProblem(Problem):
     bcs : BoundaryConditions
     loads : Loads
     initial : InitialConditions
+    backend : {"numpy", "numba"}
+        Stage kernels: NumPy arrays (default) or the compiled kernels of
+        :mod:`.kernels_numba` (same results to round-off; needs numba).
     """
 
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
-                 initial: InitialConditions = InitialConditions()):
+                 initial: InitialConditions = InitialConditions(), backend: str = "numpy"):
         self.space, self.constants = space, constants
         self.bcs, self.loads, self.initial = bcs, loads, initial
         n = space.n_ctrl
@@ -122,6 +125,18 @@ class BeamProblem(Problem):
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
+        # --- backend selection (compiled kernels: kernels_numba.py) -------------------
+        if backend not in ("numpy", "numba"):
+            raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
+        self.backend = backend
+        self._nb = None
+        if backend == "numba":
+            try:
+                from .kernels_numba import NumbaBeamKernels
+            except ImportError as exc:  # pragma: no cover - depends on the environment
+                raise ImportError(f"backend='numba' needs numba ({exc}); use backend='numpy'") from exc
+            self._nb = NumbaBeamKernels(self)
+        # --- end backend selection ----------------------------------------------------
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
@@ -172,6 +187,8 @@ class BeamProblem(Problem):
         return np.zeros((4, self.n, 3))
 
     def action(self, u: np.ndarray, y: BeamState) -> BeamState:
+        if self._nb is not None:  # backend="numba"
+            return self._nb.action(u, y, BeamState)
         th = u[1]
         th_c, th_s, th_ss = self.N0 @ th, self.N1 @ th, self.N2 @ th
         K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, th_ss)
@@ -187,9 +204,13 @@ class BeamProblem(Problem):
 
     def vector_field(self, t: float, y: BeamState) -> np.ndarray:
         """``f(t, y)`` as control values (no dexpinv): the stage rate at ``u = 0``."""
+        if self._nb is not None:  # backend="numba"
+            return self._nb.vector_field(t, y)
         return self._solve(self._rates(t, y, np.zeros((self.n, 3))))
 
     def increment_rate(self, t: float, y: BeamState, u: np.ndarray) -> np.ndarray:
+        if self._nb is not None:  # backend="numba"
+            return self._nb.increment_rate(t, y, u)
         return self._solve(self._rates(t, y, self.N0 @ u[1]))
 
     def increment_scale(self, y: BeamState) -> np.ndarray:
@@ -198,6 +219,8 @@ class BeamProblem(Problem):
         return scale
 
     def rotation_angle(self, u: np.ndarray) -> float:
+        if self._nb is not None:  # backend="numba"
+            return self._nb.rotation_angle(u)
         return float(np.max(angle(self.N0 @ u[1])))
 
     # ------------------------------------------------------------------ stage kernels
