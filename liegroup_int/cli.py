@@ -23,6 +23,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set integrator.dt=1e-4 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--resume", type=Path, default=None, metavar="DIR",
+                     help="continue the run stored in DIR from its checkpoint (with --set t_end=T to extend it)")
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -58,17 +60,24 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
             return 0
         if args.command == "run":
-            from .runner import RunError, run_scene
+            from .runner import Interrupted, RunError, resume_run, run_scene
 
-            scene = _load(args)
-            out = args.out if args.out is not None else Path("runs") / scene.name
             try:
-                res = run_scene(scene, out, quiet=args.quiet)
+                if args.resume is not None:
+                    overrides = dict(parse_override(s) for s in args.overrides)
+                    res = resume_run(args.resume, overrides, quiet=args.quiet)
+                    out = args.resume
+                    scene_name = res.summary["scene"]
+                else:
+                    scene = _load(args)
+                    out = args.out if args.out is not None else Path("runs") / scene.name
+                    scene_name = scene.name
+                    res = run_scene(scene, out, quiet=args.quiet)
             except RunError as exc:
                 print(f"error: {exc}", file=sys.stderr)
-                return 3
+                return 130 if "interrupted" in str(exc) else 3
             s = res.summary
-            print(f"{scene.name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
+            print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
             return 0
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)

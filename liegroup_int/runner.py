@@ -1,8 +1,23 @@
-"""Run a scene: build its problem, integrate, stream outputs, write the summary."""
+"""Run a scene: build its problem, integrate, stream outputs, checkpoint, summarize.
+
+Files in the output directory:
+
+* ``history.csv`` (streamed rows), ``results.h5`` (history and state snapshots, streamed),
+* ``checkpoint.npz`` (state at the last checkpointed output time),
+* ``summary.json`` (written at the end, also for failed or interrupted runs),
+* ``history.png`` and, for beams, ``shapes.png`` / ``shapes.npz``.
+
+Checkpoints are taken at output times, every ``output.checkpoint_every`` wall seconds, at
+the end, and when SIGINT/SIGTERM arrives (the run then stops at its next output time).
+Resuming from a checkpoint continues on the same time grid, so a fixed-step run resumed
+from an output time reproduces the uninterrupted run bit for bit.
+"""
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -10,13 +25,18 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .integrators import IntegrationError, integrate_adaptive, integrate_fixed, resolve_method
+from .integrators import IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method
 from .io import HistoryWriter, write_json
-from .scenes import KINDS, Scene, SceneError
+from .io.checkpoint import read_checkpoint, write_checkpoint
+from .scenes import KINDS, Scene, SceneError, load_scene
 
 
 class RunError(RuntimeError):
     """A run stopped early; files written so far stay valid. One-line message."""
+
+
+class Interrupted(IntegrationError):
+    """SIGINT/SIGTERM: the run stopped at an output time after writing a checkpoint."""
 
 
 @dataclass
@@ -26,26 +46,34 @@ class RunResult:
     history: Path
 
 
-def output_times(scene: Scene, dt: float | None) -> np.ndarray:
-    """Record times: every ``output.every`` seconds (a whole number of fixed steps), and t_end."""
+def record_interval(scene: Scene, dt: float | None) -> float:
+    """``output.every`` (default ``t_end/200``), a whole number of steps for fixed steps."""
     every = scene.output.every if scene.output.every is not None else scene.t_end / 200.0
     if dt is not None:
         every = max(1, round(every / dt)) * dt
-    n = int(np.floor(scene.t_end / every + 1e-9))
+    return every
+
+
+def output_times(t_end: float, every: float) -> np.ndarray:
+    """``every * k`` for k = 1, 2, ... up to ``t_end``; ``t_end`` itself if it is not within
+    1e-9 of such a multiple. Computed the same way for every run length, so a run to
+    ``T/2`` ends on a time of the grid of a run to ``T``."""
+    n = int(np.floor(t_end / every + 1e-9))
     t = every * np.arange(1, n + 1)
-    t = t[t < scene.t_end - 1e-12 * scene.t_end]
-    return np.append(t, scene.t_end)
+    if n == 0 or abs(t[-1] - t_end) > 1e-9 * every:
+        t = np.append(t, t_end)
+    return t
 
 
 class Progress:
     """Progress bar on stderr (tqdm), updated at most 4 times per second."""
 
-    def __init__(self, t_end: float, enabled: bool):
-        self.t_end, self.bar, self._last = t_end, None, 0.0
+    def __init__(self, t0: float, t_end: float, enabled: bool):
+        self.bar, self._last = None, 0.0
         if enabled:
             from tqdm import tqdm
 
-            self.bar = tqdm(total=t_end, unit="s(sim)", file=sys.stderr, dynamic_ncols=True,
+            self.bar = tqdm(total=t_end, initial=t0, unit="s(sim)", file=sys.stderr, dynamic_ncols=True,
                             bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s [{elapsed}<{remaining}, {postfix}]")
 
     def __call__(self, t, y, stats):
@@ -64,6 +92,39 @@ class Progress:
             self.bar.close()
 
 
+class Checkpointer:
+    """Monitor + observer: tracks the counters, writes checkpoints at output times.
+
+    A checkpoint is written at an output time when ``every_s`` wall seconds have passed
+    since the last one, or when a stop was requested (signal); after a requested stop it
+    raises :class:`Interrupted`.
+    """
+
+    def __init__(self, path: Path, every_s: float, to_arrays, meta: dict, stats: Stats):
+        self.path, self.every_s, self.to_arrays, self.meta = Path(path), every_s, to_arrays, meta
+        self.stats = stats
+        self.last_wall = time.perf_counter()
+        self.stop_requested = False
+        self.t_saved: float | None = None
+
+    def monitor(self, t, y, stats):
+        self.stats = stats
+
+    def save(self, t, y):
+        write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
+                                                                                   "h_max": self.stats.h_max},
+                         self.meta)
+        self.t_saved = t
+        self.last_wall = time.perf_counter()
+
+    def __call__(self, t, y):
+        due = self.every_s > 0 and time.perf_counter() - self.last_wall >= self.every_s
+        if due or self.stop_requested:
+            self.save(t, y)
+        if self.stop_requested:
+            raise Interrupted(f"interrupted at t={t:.6g}; checkpoint written", t, self.stats.steps)
+
+
 def stable_dt_hint(scene: Scene, sim) -> str:
     """``stable dt estimate ...`` for problems with a spectral radius (beams), else ''."""
     from .integrators import spectral_radius, stable_step
@@ -79,7 +140,7 @@ def stable_dt_hint(scene: Scene, sim) -> str:
     return f"stable dt estimate {step.dt:.3g} s (|lambda|max = {lam:.3g} 1/s, {step.rule})"
 
 
-def write_plots(out_dir: Path, scene: Scene, sim, history: Path) -> list[str]:
+def write_plots(out_dir: Path, scene: Scene, sim, history: Path, shapes=None) -> list[str]:
     """History PNG, and for problems that record shapes, a deformed-shape PNG (+ npz)."""
     from .io import plot_history, plot_shapes, read_history
 
@@ -87,93 +148,172 @@ def write_plots(out_dir: Path, scene: Scene, sim, history: Path) -> list[str]:
     data = read_history(history)
     if len(data.get("t", [])) >= 2:
         made.append(plot_history(data, out_dir / "history.png", title=scene.name).name)
-    snap = sim.snapshot
-    if snap is not None and len(snap.t) >= 2:
-        pb = sim.problem
+    if shapes is not None and len(shapes[0]) >= 2:
+        times, ctrl = shapes
         u = np.linspace(0.0, 1.0, 101)
-        B = pb.space.point_matrix(u)
-        shapes = np.einsum("uj,mjk->muk", B, np.asarray(snap.c))
-        np.savez_compressed(out_dir / "shapes.npz", t=np.asarray(snap.t), control_points=np.asarray(snap.c), u=u,
-                            centreline=shapes)
-        made.append(plot_shapes(np.asarray(snap.t), shapes, out_dir / "shapes.png", title=scene.name).name)
+        B = sim.problem.space.point_matrix(u)
+        line = np.einsum("uj,mjk->muk", B, ctrl)
+        np.savez_compressed(out_dir / "shapes.npz", t=times, control_points=ctrl, u=u, centreline=line)
+        made.append(plot_shapes(times, line, out_dir / "shapes.png", title=scene.name).name)
     return made
 
 
-def run_scene(scene: Scene, out_dir: Path, quiet: bool = True) -> RunResult:
-    """Integrate ``scene`` and write ``history.csv`` and ``summary.json`` into ``out_dir``.
+def _truncate_csv(path: Path, t_max: float) -> None:
+    lines = path.read_text().splitlines(keepends=True)
+    keep = [lines[0]] + [ln for ln in lines[1:] if ln.strip() and float(ln.split(",", 1)[0]) <= t_max]
+    path.write_text("".join(keep))
+
+
+def _install_signal_handlers(ckpt: Checkpointer):
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    old = {}
+
+    def handler(signum, frame):
+        if ckpt.stop_requested:  # second signal: stop now (the last checkpoint stays valid)
+            raise KeyboardInterrupt
+        ckpt.stop_requested = True
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        old[sig] = signal.signal(sig, handler)
+    return old
+
+
+def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None) -> RunResult:
+    """Integrate ``scene`` and write its results into ``out_dir``.
+
+    Parameters
+    ----------
+    scene : Scene
+    out_dir : Path
+    quiet : bool
+        No progress bar.
+    resume : dict, optional
+        A checkpoint (:func:`read_checkpoint`) to continue from; outputs are appended.
 
     Raises
     ------
     RunError
-        The integration stopped (blow-up, step-size failure); ``history.csv`` keeps
-        the rows written so far and ``summary.json`` records the failure.
+        The integration stopped (blow-up, step-size failure, interruption); the history
+        keeps the rows written so far, ``summary.json`` records the failure.
     """
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    kind = KINDS[scene.kind]
-    sim = kind.build(scene)
+    sim = KINDS[scene.kind].build(scene)
     spec = scene.integrator
-    dt = spec.dt
-    if dt == "auto":
-        dt = sim.info["dt_auto"]
+    dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
     tab = resolve_method(spec.method)
-    t_out = output_times(scene, dt)
+    t0, y0, stats = 0.0, sim.y0, Stats()
+    every = record_interval(scene, dt)
+    if resume is not None:
+        t0, y0 = resume["t"], sim.from_arrays(resume["state"])
+        every = resume["meta"]["every"]
+        st = resume["stats"]
+        stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
+                      wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"])
+        if dt is None and "h_last" in resume["meta"]:
+            pass
+        if scene.t_end <= t0:
+            raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
+    t_out = output_times(scene.t_end, every)
+    t_out = t_out[t_out > t0 + 1e-9 * every]
     history = out_dir / "history.csv"
-    writer = HistoryWriter(history, sim.diagnostics, getattr(sim, "columns", None) or sim.info.get("columns"))
+    columns = sim.info.get("columns")
+    if resume is not None and history.exists():
+        _truncate_csv(history, t0 + 1e-9 * every)
+    writer = HistoryWriter(history, sim.diagnostics, columns, append=resume is not None)
     observers = [writer]
+    h5 = None
+    if scene.output.hdf5:
+        from .io.hdf5 import Hdf5Writer
+
+        attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
+        h5 = Hdf5Writer(out_dir / "results.h5", sim.diagnostics, columns, sim.to_arrays, attrs, append=resume is not None)
+        if resume is not None:
+            h5.truncate_after(t0 + 1e-9 * every)
+        observers.append(h5)
+    shapes = None
     if sim.snapshot is not None:
         observers.append(sim.snapshot)
+    meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt}
+    ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
+    observers.append(ckpt)
+    first = [resume is not None]
 
     def observer(t, y):
+        if first[0]:  # a resumed run does not record its starting point again
+            first[0] = False
+            return
         for obs in observers:
             obs(t, y)
 
-    progress = Progress(scene.t_end, enabled=not quiet and sys.stderr.isatty())
+    progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
+
+    def monitor(t, y, st):
+        ckpt.monitor(t, y, st)
+        progress(t, y, st)
+
     summary = {
-        "scene": scene.name,
-        "source": scene.source,
-        "problem": scene.kind,
-        "method": spec.method,
-        "tableau": tab.name,
-        "dt": dt,
-        "rtol": spec.rtol,
-        "atol": spec.atol,
-        "t_end": scene.t_end,
-        "version": __version__,
-        "scene_keys": dict(scene.raw),
+        "scene": scene.name, "source": scene.source, "problem": scene.kind, "method": spec.method,
+        "tableau": tab.name, "dt": dt, "rtol": spec.rtol, "atol": spec.atol, "t_end": scene.t_end,
+        "version": __version__, "scene_keys": dict(scene.raw), "resumed_from": t0 if resume is not None else None,
         **sim.info,
     }
-    t_reached, y_final, status, error = 0.0, sim.y0, "ok", None
+    old_handlers = _install_signal_handlers(ckpt)
+    t_reached, y_final, status, error = t0, y0, "ok", None
     start = time.perf_counter()
     try:
         if dt is not None:
-            t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (0.0, scene.t_end), sim.y0, dt, observer, t_out, progress)
+            t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (t0, t_out[-1]), y0, dt, observer, t_out,
+                                                        monitor, stats=stats)
         else:
             t_reached, y_final, stats = integrate_adaptive(
-                sim.problem, tab, (0.0, scene.t_end), sim.y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out, progress,
-                h_max=sim.info.get("dt_auto", np.inf),
+                sim.problem, tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out,
+                monitor, h_max=sim.info.get("dt_auto", np.inf), stats=stats,
             )
+        ckpt.save(t_reached, y_final)
+    except Interrupted as exc:
+        status, t_reached = "interrupted", exc.t
+        error = (f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "
+                 f"--resume {out_dir}")
     except IntegrationError as exc:
-        status, error = "failed", f"{scene.name}: {exc}"
+        status, error, t_reached = "failed", f"{scene.name}: {exc}", exc.t
         hint = stable_dt_hint(scene, sim)
         if hint:
             error += f"; {hint}"
-        stats = None
-        t_reached = exc.t
     finally:
+        for sig, h in old_handlers.items():
+            signal.signal(sig, h)
         writer.close()
+        if h5 is not None:
+            h5.close()
         progress.close(t_reached)
-    summary.update({"status": status, "t_reached": t_reached, "wall_time_s": time.perf_counter() - start})
-    if stats is not None:
-        summary.update(stats.as_dict())
-        summary["wall_time_s"] = stats.wall_time_s
-        summary["final"] = sim.final_state(y_final)
-        summary["final"]["t"] = t_reached
+    summary.update({"status": status, "t_reached": t_reached, "history_rows": writer.rows})
+    summary.update(stats.as_dict())
+    summary["wall_time_s"] = stats.wall_time_s if status == "ok" else time.perf_counter() - start
+    if status == "ok":
+        summary["final"] = sim.final_state(y_final) | {"t": t_reached}
     else:
         summary["error"] = error
-    summary["history_rows"] = writer.rows
-    summary["plots"] = write_plots(out_dir, scene, sim, history)
+    if sim.snapshot is not None and getattr(sim.snapshot, "t", None):
+        shapes = (np.asarray(sim.snapshot.t), np.asarray(sim.snapshot.c))
+    summary["plots"] = write_plots(out_dir, scene, sim, history, shapes)
     write_json(out_dir / "summary.json", summary)
     if error is not None:
-        raise RunError(error + f" (history up to the last output is in {history})")
+        raise RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are in {out_dir})")
     return RunResult(out_dir, summary, history)
+
+
+def resume_run(out_dir: Path, overrides: dict, quiet: bool = True) -> RunResult:
+    """Continue the run stored in ``out_dir`` from its checkpoint (``--resume DIR``)."""
+    path = Path(out_dir) / "checkpoint.npz"
+    if not path.exists():
+        raise SceneError(f"{out_dir}: no checkpoint.npz to resume from")
+    ckpt = read_checkpoint(path)
+    meta = ckpt["meta"]
+    keys = dict(meta["scene_keys"])
+    keys.update(overrides)
+    source = meta["source"]
+    src = source.removeprefix("builtin:")
+    scene = load_scene(src, keys)
+    return run_scene(scene, out_dir, quiet=quiet, resume=ckpt)

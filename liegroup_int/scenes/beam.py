@@ -7,6 +7,7 @@ import numpy as np
 from ..iga import CollocationSpace, NurbsCurve, arc_nurbs_quadratic, helix_quarter, k_refine, straight
 from ..problems.beam import (
     BeamProblem,
+    BeamState,
     BoundaryConditions,
     EndLoad,
     InitialConditions,
@@ -24,6 +25,10 @@ ZERO = (0.0, 0.0, 0.0)
 
 def _int_at_least(lo):
     return lambda v: None if v >= lo else f"an integer >= {lo}"
+
+
+def _int_between(lo, hi):
+    return lambda v: None if lo <= v <= hi else f"an integer from {lo} to {hi}"
 
 
 def _end_keys(end: str) -> list[Key]:
@@ -47,14 +52,14 @@ KEYS = {
         Key("geometry.length", "float", 1.0, "length of a straight beam", "m", positive),
         Key("geometry.direction", "vec3", (1.0, 0.0, 0.0), "axis direction of a straight beam"),
         Key("geometry.origin", "vec3", ZERO, "position of s = 0 of a straight beam", "m"),
-        Key("geometry.degree", "int", 2, "degree of a given NURBS (kind = nurbs)", "", _int_at_least(1)),
+        Key("geometry.degree", "int", 2, "degree of a given NURBS (kind = nurbs; 1 to 10)", "", _int_between(1, 10)),
         Key("geometry.control_points", "floats", (0.0,), "flat list of x, y, z of the NURBS control points", "m"),
         Key("geometry.weights", "floats", (1.0,), "NURBS weights (default all 1)"),
         Key("geometry.knots", "floats", (0.0,), "NURBS knot vector (default open uniform)"),
         Key("geometry.reference_vector", "vec3", ZERO,
             "vector defining the section axis d1 (projected normal to the tangent); 0 = automatic"),
-        Key("space.degree", "int", 4, "spline degree p", "", _int_at_least(2)),
-        Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1)", "", _int_at_least(4)),
+        Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
+        Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
         Key("material.G", "float", None, "shear modulus (overrides nu)", "Pa", positive),
@@ -264,7 +269,8 @@ def build(scene: Scene) -> Simulation:
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
     }
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
-                     final_state=final_state, info=info, snapshot=ShapeRecorder())
+                     final_state=final_state, info=info, snapshot=ShapeRecorder(),
+                     to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a))
     return sim
 
 

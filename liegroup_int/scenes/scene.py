@@ -31,6 +31,8 @@ class OutputSpec:
 
     every: float | None
     quantities: tuple[str, ...]
+    hdf5: bool = True
+    checkpoint_every: float = 60.0
 
 
 @dataclass(frozen=True)
@@ -89,6 +91,8 @@ class Simulation:
     final_state: Callable[[Any], dict]
     info: dict = field(default_factory=dict)
     snapshot: Callable[[Any], dict] | None = None
+    to_arrays: Callable[[Any], dict] = lambda y: {"y": y}
+    from_arrays: Callable[[dict], Any] = lambda a: a["y"]
 
 
 @dataclass(frozen=True)
@@ -116,6 +120,8 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("integrator.atol", "float", None, "absolute tolerance (adaptive pairs)", "", positive),
         Key("output.every", "float", None, "simulated time between recorded rows (default t_end/200)", "s", positive),
         Key("output.quantities", "strs", kind.default_quantities, "recorded quantities", choices=kind.quantities),
+        Key("output.hdf5", "bool", True, "also stream history and state snapshots to results.h5"),
+        Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
     ]
     return {k.name: k for k in keys}
 
@@ -161,7 +167,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         description=v["description"],
         t_end=v["t_end"],
         integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
-        output=OutputSpec(every, v["output.quantities"]),
+        output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
     )

@@ -9,7 +9,9 @@ one loop over the collocation points per call:
   with ``B1 = B'/t`` and ``C1 = C'/t``), ``c, v, w`` plus their increments.
 * :func:`rates_kernel`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains,
   resultants, balance residuals, enhanced-collocation terms at Neumann ends, ``dexpinv``,
-  Dirichlet rows set to zero, then the ``M_c`` solve of all 12 columns in place.
+  Dirichlet rows set to zero, all into a row-contiguous ``(n, 12)`` right-hand side whose
+  forward (``L``) sweep runs in the same loop; then the backward (``U``) sweep writes the
+  ``(4, n, 3)`` rate.
 * :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
 
 SO(3) coefficients use the branch logic of :mod:`liegroup_int.groups.so3_coefficients`:
@@ -17,10 +19,11 @@ the 12-term Horner polynomial in ``theta**2`` with the same float coefficients
 (``TAYLOR`` tables, passed in at run time, not frozen into the cached machine code) below
 ``TAYLOR_THRESHOLD`` (1 rad), the same closed forms at and above it.
 
-Banded storage. ``N0, N1, N2`` are stored as ``(3, n, W)`` band rows with one start
-column ``j0[i]`` per row (``W = lower + upper + 1`` of the union of their non-zero
-patterns, windows clamped inside ``[0, n)``); the construction checks that the bands
-reproduce the dense matrices exactly.
+Banded storage. ``N0, N1, N2`` are stored as ``(3, n, W)`` row windows with one start
+column ``j0[i]`` per row: ``W`` is the widest row support of the union of their non-zero
+patterns (``p + 1`` at the Greville points: 5 multiply-adds per row and field at p = 4),
+windows kept inside ``[0, n)``; the construction checks that the windows hold every
+non-zero entry.
 
 ``M_c`` solve. ``M_c = N0`` is the collocation matrix of the (rational) B-spline basis at
 the Greville abscissae: totally positive (Karlin; for NURBS ``diag(1/W(u_i)) N diag(w_j)``
@@ -32,8 +35,10 @@ pivots, non-negative factors up to round-off, small residual against the dense m
 and the dense inverse is used instead if a check fails. The solve costs
 ``12 n (lower + upper + 1)`` multiply-adds, linear in ``n``. A precomputed dense inverse
 (``12 n^2``) is available too (``solver="dense"``); ``solver="auto"`` uses it only for
-``n <= DENSE_MAX_N`` (measured: the banded solve is never slower at ``p = 4``, see
-``benchmarks/beam_backends.py``).
+``n <= DENSE_MAX_N`` (0: measured, the banded solve is never slower, see the constant).
+Checked against LAPACK ``gbtrf/gbtrs`` (partial pivoting) for p = 2..8, n up to 2001, on
+straight, arch (NURBS) and helix geometries: factors non-negative, solutions equal to
+2e-15 relative.
 
 Data passing. A numba call costs ~0.12 us per array argument on top of ~0.3 us, so all
 constant data (section constants, loads, series tables, reference strains/curvatures,
@@ -52,21 +57,25 @@ import math
 import numpy as np
 from numba import njit
 
-from ...groups.so3_coefficients import N_TERMS, TAYLOR, TAYLOR_THRESHOLD
+from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
-#: Measured (p = 4, this machine): the banded LU solve is faster from n = 8 on, and the
-#: dense product only ties below; 0 would do as well. Kept so that tiny systems skip
-#: the band bookkeeping.
-DENSE_MAX_N = 8
+#: Measured (cantilever p = 4, whole stage-rate kernel, best of 30 x 500 calls):
+#: n = 5: banded 1.29 us / dense 1.47 us; 8: 1.56 / 1.51; 12: 1.81 / 2.08;
+#: 16: 2.08 / 2.48; 31: 3.16 / 5.32; 61: 5.31 / 31.2; 121: 14.2 / 105.
+#: The dense inverse never wins by more than timing noise, so ``auto`` is banded; the
+#: dense inverse remains the fallback when the no-pivot factorization fails its checks.
+DENSE_MAX_N = 0
 
 _SERIES_KEYS = ("A", "B", "C", "D", "B1", "C1")
 _IA, _IB, _IC, _ID, _IB1, _IC1 = range(6)
 
 # ---- layout of the int array ``si`` (header) -----------------------------------------
 _H_N, _H_W, _H_L, _H_U, _H_DENSE, _H_NE = 0, 1, 2, 3, 4, 5
-_H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0 = range(6, 15)
+_H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0, _H_NT = range(6, 16)
 _HEADER = 16
+# (everything that may change outside this file - series length and coefficients, the
+# threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
 # CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold
 _P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR = 0, 3, 6, 9, 10, 13, 16, 17, 18
@@ -88,11 +97,22 @@ def _horner(ser, k, t2):
 
 @njit(cache=True, fastmath=False)
 def _coef_ABCB1C1(t, ser, thr):
-    """``(A, B, C, B1, C1)`` at the angle ``t`` (series below ``thr``, closed form above)."""
+    """``(A, B, C, B1, C1)`` at the angle ``t`` (series below ``thr``, closed form above).
+
+    The five Horner recurrences run in one loop (independent chains, same arithmetic
+    per chain as :func:`_horner`), which hides their latency.
+    """
     if t < thr:
         t2 = t * t
-        return (_horner(ser, _IA, t2), _horner(ser, _IB, t2), _horner(ser, _IC, t2),
-                _horner(ser, _IB1, t2), _horner(ser, _IC1, t2))
+        m = ser.shape[1]
+        a, b, c, b1, c1 = ser[_IA, m - 1], ser[_IB, m - 1], ser[_IC, m - 1], ser[_IB1, m - 1], ser[_IC1, m - 1]
+        for j in range(m - 2, -1, -1):
+            a = a * t2 + ser[_IA, j]
+            b = b * t2 + ser[_IB, j]
+            c = c * t2 + ser[_IC, j]
+            b1 = b1 * t2 + ser[_IB1, j]
+            c1 = c1 * t2 + ser[_IC1, j]
+        return a, b, c, b1, c1
     s, co = math.sin(t), math.cos(t)
     sh = math.sin(0.5 * t) / t
     return (s / t, 2.0 * sh * sh, (t - s) / t ** 3.0,
@@ -119,7 +139,8 @@ def _views(sf, si):
     nlu = si[_H_L] + si[_H_U] + 1
     ne = si[_H_NE]
     prm = sf[si[_H_PRM]:si[_H_PRM] + _N_PRM]
-    ser = sf[si[_H_SER]:si[_H_SER] + 6 * N_TERMS].reshape((6, N_TERMS))
+    nt = si[_H_NT]
+    ser = sf[si[_H_SER]:si[_H_SER] + 6 * nt].reshape((6, nt))
     geo = sf[si[_H_GEO]:si[_H_GEO] + 9 * n].reshape((n, 9))
     band = sf[si[_H_BAND]:si[_H_BAND] + 3 * n * W].reshape((3, n, W))
     lu = sf[si[_H_LU]:si[_H_LU] + n * nlu].reshape((n, nlu))
@@ -138,6 +159,7 @@ def band_lu_nopivot(ab, lower, upper):
 
     Afterwards the strictly lower part holds the multipliers of the unit lower factor
     ``L`` and the rest ``U``. No fill-in (no row exchanges). Returns the smallest pivot.
+    (:func:`_factor_mc` then replaces the diagonal by the reciprocal pivots.)
     """
     n = ab.shape[0]
     pmin = np.inf
@@ -153,47 +175,62 @@ def band_lu_nopivot(ab, lower, upper):
     return pmin
 
 
-@njit(cache=True, fastmath=False)
-def _solve_inplace(x, lu, lower, upper, minv, dense):
-    """``x[f, :, d] <- M_c^-1 x[f, :, d]`` for the 12 columns of ``x`` ``(4, n, 3)``."""
-    n = x.shape[1]
+@njit(cache=True, fastmath=False, inline="always")
+def _forward_row(x, i, lu, lower):
+    """Row ``i`` of the unit-lower sweep ``x <- L^-1 x`` (rows ``< i`` already done)."""
+    for j in range(max(0, i - lower), i):
+        m = lu[i, lower + j - i]
+        if m != 0.0:
+            for q in range(12):
+                x[i, q] -= m * x[j, q]
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _finish_solve(x, lu, lower, upper, minv, dense, forward_done, out):
+    """``out[f, :, d] = M_c^-1 x[:, 3 f + d]``; ``x`` ``(n, 12)`` is overwritten.
+
+    Banded: forward sweep (unless ``forward_done``), then the backward sweep with ``U``
+    (diagonal stored as reciprocal), scattering each finished row into ``out``.
+    Dense: ``out = M_c^-1 x`` with the precomputed inverse.
+    """
+    n = x.shape[0]
     if dense:
-        b = x.copy()
         for i in range(n):
-            for f in range(4):
-                for d in range(3):
-                    acc = 0.0
-                    for j in range(n):
-                        acc += minv[i, j] * b[f, j, d]
-                    x[f, i, d] = acc
+            for q in range(12):
+                acc = 0.0
+                for j in range(n):
+                    acc += minv[i, j] * x[j, q]
+                out[q // 3, i, q % 3] = acc
         return
-    # forward: unit lower L
-    for i in range(1, n):
-        for j in range(max(0, i - lower), i):
-            m = lu[i, lower + j - i]
-            if m != 0.0:
-                for f in range(4):
-                    for d in range(3):
-                        x[f, i, d] -= m * x[f, j, d]
-    # backward: upper U
+    if not forward_done:
+        for i in range(1, n):
+            _forward_row(x, i, lu, lower)
     for i in range(n - 1, -1, -1):
         for j in range(i + 1, min(n, i + upper + 1)):
             m = lu[i, lower + j - i]
             if m != 0.0:
-                for f in range(4):
-                    for d in range(3):
-                        x[f, i, d] -= m * x[f, j, d]
-        piv = lu[i, lower]
+                for q in range(12):
+                    x[i, q] -= m * x[j, q]
+        r = lu[i, lower]
+        for q in range(12):
+            x[i, q] *= r
         for f in range(4):
-            for d in range(3):
-                x[f, i, d] /= piv
+            out[f, i, 0] = x[i, 3 * f]
+            out[f, i, 1] = x[i, 3 * f + 1]
+            out[f, i, 2] = x[i, 3 * f + 2]
 
 
 @njit(cache=True, fastmath=False)
 def solve_kernel(x, sf, si):
-    """Public wrapper of the in-place ``M_c`` solve (tests, benchmarks)."""
+    """``M_c^-1`` on an increment-shaped array ``x`` ``(4, n, 3)``, in place."""
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
-    _solve_inplace(x, lu, si[_H_L], si[_H_U], minv, si[_H_DENSE] != 0)
+    n = x.shape[1]
+    ws = np.empty((n, 12))
+    for i in range(n):
+        for f in range(4):
+            for d in range(3):
+                ws[i, 3 * f + d] = x[f, i, d]
+    _finish_solve(ws, lu, si[_H_L], si[_H_U], minv, si[_H_DENSE] != 0, False, x)
 
 
 # ====================================================================== action
@@ -289,6 +326,16 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
     """
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
+    lower, dense = si[_H_L], si[_H_DENSE] != 0
+    x = np.empty((n, 12))  # right-hand sides, row i = (v, w, n_s/mu, tq) rows of point i
+    # Dirichlet rows (prescribed zero rates, method.md section 3): zero per row and field
+    fixp = np.zeros(n, dtype=np.bool_)
+    fixr = np.zeros(n, dtype=np.bool_)
+    for e in range(ne):
+        if endi[e, 1] != 0:
+            fixp[endi[e, 0]] = True
+        if endi[e, 2] != 0:
+            fixr[endi[e, 0]] = True
     CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
     CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
     J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
@@ -384,31 +431,29 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
                 tq0 += fac * (mc0 - nrm * M0_)
                 tq1 += fac * (mc1 - nrm * M1_)
                 tq2 += fac * (mc2 - nrm * M2_)
-        # right-hand sides
-        out[0, i, 0], out[0, i, 1], out[0, i, 2] = vc0, vc1, vc2
+        # right-hand sides (Dirichlet rows: zero)
         ang = math.sqrt(th0 * th0 + th1 * th1 + th2 * th2)
         cD = _coef_D(ang, ser, thr)
         xv0, xv1, xv2 = _cross(th0, th1, th2, wc0, wc1, wc2)
         xx0, xx1, xx2 = _cross(th0, th1, th2, xv0, xv1, xv2)
-        out[1, i, 0] = wc0 - 0.5 * xv0 + cD * xx0
-        out[1, i, 1] = wc1 - 0.5 * xv1 + cD * xx1
-        out[1, i, 2] = wc2 - 0.5 * xv2 + cD * xx2
-        out[2, i, 0], out[2, i, 1], out[2, i, 2] = ns0 / mu, ns1 / mu, ns2 / mu
         z0, z1, z2 = tq0 / J0, tq1 / J1, tq2 / J2
-        out[3, i, 0] = r00 * z0 + r01 * z1 + r02 * z2
-        out[3, i, 1] = r10 * z0 + r11 * z1 + r12 * z2
-        out[3, i, 2] = r20 * z0 + r21 * z1 + r22 * z2
-    # Dirichlet rows: prescribed (zero) rates before the solve (method.md section 3)
-    for e in range(ne):
-        i = endi[e, 0]
-        for d in range(3):
-            if endi[e, 1] != 0:
-                out[0, i, d] = 0.0
-                out[2, i, d] = 0.0
-            if endi[e, 2] != 0:
-                out[1, i, d] = 0.0
-                out[3, i, d] = 0.0
-    _solve_inplace(out, lu, si[_H_L], si[_H_U], minv, si[_H_DENSE] != 0)
+        if fixp[i]:
+            x[i, 0] = x[i, 1] = x[i, 2] = x[i, 6] = x[i, 7] = x[i, 8] = 0.0
+        else:
+            x[i, 0], x[i, 1], x[i, 2] = vc0, vc1, vc2
+            x[i, 6], x[i, 7], x[i, 8] = ns0 / mu, ns1 / mu, ns2 / mu
+        if fixr[i]:
+            x[i, 3] = x[i, 4] = x[i, 5] = x[i, 9] = x[i, 10] = x[i, 11] = 0.0
+        else:
+            x[i, 3] = wc0 - 0.5 * xv0 + cD * xx0
+            x[i, 4] = wc1 - 0.5 * xv1 + cD * xx1
+            x[i, 5] = wc2 - 0.5 * xv2 + cD * xx2
+            x[i, 9] = r00 * z0 + r01 * z1 + r02 * z2
+            x[i, 10] = r10 * z0 + r11 * z1 + r12 * z2
+            x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
+        if not dense:  # forward sweep of the banded solve, fused (rows < i are final)
+            _forward_row(x, i, lu, lower)
+    _finish_solve(x, lu, lower, si[_H_U], minv, dense, True, out)
 
 
 @njit(cache=True, fastmath=False)
@@ -435,34 +480,59 @@ def rotation_angle_kernel(u, sf, si):
 
 # ====================================================================== Python side
 def _band_layout(mats, n):
-    """Union band widths of ``mats`` and the clamped window starts ``j0``."""
+    """Row windows of the union non-zero pattern of ``mats``: ``(bands, j0)``.
+
+    ``W`` is the widest row support (``p + 1`` for B-splines at the Greville points);
+    ``j0[i]`` is the first non-zero column of row ``i``, moved left where needed so that
+    ``j0[i] + W <= n``.
+    """
     nz = np.zeros((n, n), dtype=bool)
     for m in mats:
         nz |= m != 0.0
-    i, j = np.nonzero(nz)
-    lo = int(max(0, np.max(i - j))) if i.size else 0
-    hi = int(max(0, np.max(j - i))) if i.size else 0
-    W = min(lo + hi + 1, n)
-    j0 = np.clip(np.arange(n) - lo, 0, n - W).astype(np.int64)
-    bands = np.zeros((len(mats), n, W))
+    has = nz.any(axis=1)
+    first = np.where(has, nz.argmax(axis=1), 0)
+    last = np.where(has, n - 1 - nz[:, ::-1].argmax(axis=1), 0)
+    W = int(max(1, np.max(last - first + 1)))
+    j0 = np.minimum(first, n - W).astype(np.int64)
     rows = np.arange(n)[:, None]
     cols = j0[:, None] + np.arange(W)[None, :]
+    bands = np.zeros((len(mats), n, W))
     for k, m in enumerate(mats):
         bands[k] = m[rows, cols]
-        back = np.zeros((n, n))
-        back[rows, cols] = bands[k]
-        if not np.array_equal(back, m):  # pragma: no cover - structural guarantee
+        if np.count_nonzero(bands[k]) != np.count_nonzero(m):  # pragma: no cover - by construction
             raise AssertionError("band extraction lost non-zero entries")
     return bands, j0
 
 
-def _factor_mc(N0, lower, upper):
-    """Banded LU without pivoting of ``M_c``; ``None`` if a stability check fails."""
-    n = N0.shape[0]
-    ab = np.zeros((n, lower + upper + 1))
+@njit(cache=True, fastmath=False)
+def band_lu_residual(ab, mb, lower, upper):
+    """``max |L U - M|`` over the band (``L U`` has the band of ``M``), from the factors in
+    ``ab`` (before the pivots are inverted) and ``mb`` = ``M`` in the same band layout."""
+    n = ab.shape[0]
+    worst = 0.0
     for i in range(n):
         for j in range(max(0, i - lower), min(n, i + upper + 1)):
-            ab[i, lower + j - i] = N0[i, j]
+            acc = 0.0
+            for k in range(max(0, i - lower, j - upper), min(i, j) + 1):
+                lik = 1.0 if k == i else ab[i, lower + k - i]
+                acc += lik * ab[k, lower + j - k]
+            worst = max(worst, abs(acc - mb[i, lower + j - i]))
+    return worst
+
+
+def _factor_mc(N0, lower, upper):
+    """Banded LU without pivoting of ``M_c``; ``None`` if a stability check fails.
+
+    Cost ``O(n (l + u)^2)``; the checks work on the band too.
+    """
+    n = N0.shape[0]
+    mb = np.zeros((n, lower + upper + 1))
+    for d in range(-lower, upper + 1):  # diagonal j - i = d
+        i = np.arange(max(0, -d), min(n, n - d))
+        mb[i, lower + d] = N0[i, i + d]
+    if np.count_nonzero(mb) != np.count_nonzero(N0):  # pragma: no cover - band widths are exact
+        return None
+    ab = mb.copy()
     pmin = band_lu_nopivot(ab, lower, upper)
     scale = float(np.max(np.abs(N0)))
     if not (np.all(np.isfinite(ab)) and pmin > 1e-8 * scale):
@@ -470,17 +540,10 @@ def _factor_mc(N0, lower, upper):
     # totally positive M_c: L and U are non-negative (up to round-off)
     if np.min(ab) < -1e-12 * max(1.0, float(np.max(np.abs(ab)))):
         return None
-    # residual of the factorization: |L U - M_c| small against |M_c|
-    L = np.eye(n)
-    U = np.zeros((n, n))
-    for i in range(n):
-        for j in range(max(0, i - lower), min(n, i + upper + 1)):
-            if j < i:
-                L[i, j] = ab[i, lower + j - i]
-            else:
-                U[i, j] = ab[i, lower + j - i]
-    if np.max(np.abs(L @ U - N0)) > 1e-13 * scale * n:
+    # backward error of the factorization against |M_c|
+    if band_lu_residual(ab, mb, lower, upper) > 1e-13 * scale * (lower + upper + 1):
         return None
+    ab[:, lower] = 1.0 / ab[:, lower]  # the solve multiplies by the reciprocal pivots
     return ab
 
 
@@ -535,20 +598,20 @@ class NumbaBeamKernels:
         ne = len(ends)
         endi = np.zeros((ne, _NEI), dtype=np.int64)
         endf = np.zeros((ne, _NEF))
-        self._profiles = []  # (row, slice, base vector, profile) of non-constant loads
+        profiles = []  # (row, first column, base vector, profile) of non-constant loads
         for k, e in enumerate(ends):
             endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann)
             endf[k, 0], endf[k, 1] = e.normal, e.factor
             ld = e.load
-            for sl, vec, prof, on in ((slice(2, 5), ld.force, ld.force_profile, e.force_neumann),
-                                      (slice(5, 8), ld.couple, ld.couple_profile, e.moment_neumann)):
+            for col, vec, prof, on in ((2, ld.force, ld.force_profile, e.force_neumann),
+                                       (5, ld.couple, ld.couple_profile, e.moment_neumann)):
                 vec = np.asarray(vec, dtype=float)
                 if not (on and np.any(vec)):
                     continue
                 if prof.is_constant:
-                    endf[k, sl] = vec * prof(0.0)
+                    endf[k, col:col + 3] = vec * prof(0.0)
                 else:
-                    self._profiles.append((k, sl, vec, prof))
+                    profiles.append((k, col, vec, prof))
 
         blocks = [("prm", prm), ("ser", ser), ("geo", geo), ("band", bands), ("lu", ab),
                   ("minv", minv), ("endf", endf)]
@@ -565,10 +628,12 @@ class NumbaBeamKernels:
         si[_H_PRM], si[_H_SER], si[_H_GEO], si[_H_BAND] = offs["prm"], offs["ser"], offs["geo"], offs["band"]
         si[_H_LU], si[_H_MINV], si[_H_ENDF] = offs["lu"], offs["minv"], offs["endf"]
         si[_H_ENDI], si[_H_J0] = _HEADER, _HEADER + endi.size
+        si[_H_NT] = ser.shape[1]
         si[_HEADER:_HEADER + endi.size] = endi.ravel()
         si[_HEADER + endi.size:] = j0
         self.sf, self.si = sf, si
-        self._endf = sf[offs["endf"]:offs["endf"] + endf.size].reshape(endf.shape)  # view
+        # positions in ``sf`` (not views: they would not survive pickling)
+        self._profiles = [(offs["endf"] + k * _NEF + col, vec, prof) for k, col, vec, prof in profiles]
         self._t_loads = None
         self._zero = np.zeros((4, n, 3))
 
@@ -577,8 +642,9 @@ class NumbaBeamKernels:
         """End loads times their profiles at ``t`` (once per distinct stage time)."""
         if t == self._t_loads:
             return
-        for k, sl, vec, prof in self._profiles:
-            self._endf[k, sl] = vec * prof(t)
+        sf = self.sf
+        for a, vec, prof in self._profiles:
+            sf[a:a + 3] = vec * prof(t)
         self._t_loads = t
 
     def action(self, u, y, state_cls):

@@ -1,0 +1,620 @@
+"""Parameter studies: grids of scene overrides run serially or on Dask, convergence tables.
+
+A study is a list of *grid points* (dicts of dotted scene keys, ``{"integrator.dt": 1e-3}``)
+applied on top of a scene and common base overrides. Every point's scene is validated
+before anything runs (a bad key raises :class:`SceneError` at once); then each point runs
+with :func:`liegroup_int.runner.run_scene` into ``out_dir/run_XXX`` and yields a small
+*row* dict. A run that fails (blow-up, step-size failure) gives a row with
+``status = "failed"`` and the one-line error instead of stopping the study.
+
+Typical use::
+
+    grid = expand_grid({"integrator.dt": [0.02, 0.01, 0.005, 0.0025]})
+    rows = run_study("heavy_top", {"t_end": 1.0}, grid, "runs/study")
+    table = convergence_table(rows, "integrator.dt", quantity="auto")
+    write_study("runs/study", rows, table)
+
+Parallel runs use ``dask.distributed`` (``pip install "dask[distributed]"``): a local
+cluster of worker processes, or an existing scheduler by address. Workers only need
+``liegroup_int`` importable (they rebuild the scene from its validated keys, not from the
+file) and must see ``out_dir`` (shared file system for remote workers).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .runner import RunError, run_scene
+from .scenes import SceneError, load_scene, parse_override
+from .scenes.scene import build_scene
+
+#: Row fields, in CSV column order (the overrides come after ``run``, the flattened
+#: final state before ``error``).
+ROW_FIELDS = ("run", "status", "steps", "rhs_evals", "wall_time_s", "t_reached", "error", "run_dir")
+
+
+# ---------------------------------------------------------------------- grids
+def expand_grid(grid: Mapping[str, Sequence]) -> list[dict]:
+    """Cartesian product of value lists, as override dicts.
+
+    Parameters
+    ----------
+    grid : mapping of str to sequence
+        Dotted scene key -> non-empty list of values.
+
+    Returns
+    -------
+    list of dict
+        One dict per combination, the last key varying fastest (``itertools.product``
+        order); ``[{}]`` for an empty grid.
+
+    Raises
+    ------
+    ValueError
+        A value list is empty or not a list/tuple.
+    """
+    keys = list(grid)
+    for key in keys:
+        values = grid[key]
+        if not isinstance(values, (list, tuple)) or len(values) == 0:
+            raise ValueError(f"grid key {key!r}: expected a non-empty list of values, got {values!r}")
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(grid[k] for k in keys))]
+
+
+def _split_top_level(text: str) -> list[str]:
+    """Split on commas outside brackets and quotes (``"[1,2,3],[4,5,6]"`` -> 2 items)."""
+    parts, depth, quote, start = [], 0, None, 0
+    for i, ch in enumerate(text):
+        if quote:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    parts.append(text[start:])
+    return [p.strip() for p in parts]
+
+
+def parse_values(key: str, values: Sequence[str]) -> list:
+    """Command-line values of one key (``--values 1e-3 5e-4``), each read as a TOML value
+    when it parses as one (numbers, booleans, arrays, quoted strings), else as a string.
+
+    Parameters
+    ----------
+    key : str
+        Dotted scene key.
+    values : sequence of str
+
+    Returns
+    -------
+    list
+    """
+    return [parse_override(f"{key}={v}")[1] for v in values]
+
+
+def parse_grid(specs: Sequence[str]) -> dict[str, list]:
+    """``["KEY=V1,V2", ...]`` (``--grid`` arguments) -> ``{KEY: [v1, v2], ...}``.
+
+    Commas inside brackets or quotes do not split (``geometry.direction=[1,0,0],[0,1,0]``).
+
+    Raises
+    ------
+    SceneError
+        A spec without ``=``, an empty key or value, or a key given twice.
+    """
+    grid: dict[str, list] = {}
+    for spec in specs:
+        if "=" not in spec:
+            raise SceneError(f"--grid {spec!r}: expected KEY=V1,V2,...")
+        key, raw = (s.strip() for s in spec.split("=", 1))
+        items = _split_top_level(raw)
+        if not key or any(not item for item in items):
+            raise SceneError(f"--grid {spec!r}: expected KEY=V1,V2,... with non-empty values")
+        if key in grid:
+            raise SceneError(f"--grid {spec!r}: key {key!r} given twice")
+        grid[key] = parse_values(key, items)
+    return grid
+
+
+# ---------------------------------------------------------------------- running
+@dataclass(frozen=True)
+class StudyTask:
+    """One grid point, ready to run anywhere (picklable: no file access needed).
+
+    Attributes
+    ----------
+    index : int
+    given : dict
+        The scene's validated flat keys (``Scene.raw``, overrides applied).
+    source, name : str
+        The scene's source (for messages) and name.
+    overrides : dict
+        The grid point (only the varied keys).
+    run_dir : str
+        Absolute output directory of this run.
+    """
+
+    index: int
+    given: dict
+    source: str
+    name: str
+    overrides: dict
+    run_dir: str
+
+
+def prepare_tasks(scene: str | Path, base_overrides: Mapping[str, Any] | None, grid: Sequence[Mapping[str, Any]],
+                  out_dir: str | Path) -> list[StudyTask]:
+    """Load and validate every grid point's scene; raise on the first invalid one.
+
+    Parameters
+    ----------
+    scene : str or Path
+        Scene file or built-in name.
+    base_overrides : mapping, optional
+        Overrides common to all runs (a grid point's keys take precedence).
+    grid : sequence of mapping
+        Grid points (see :func:`expand_grid`).
+    out_dir : str or Path
+        Study directory; run ``i`` goes to ``out_dir/run_{i:03d}``.
+
+    Returns
+    -------
+    list of StudyTask
+
+    Raises
+    ------
+    SceneError
+        An invalid grid point (message names the scene, key and value).
+    ValueError
+        An empty grid.
+    """
+    if len(grid) == 0:
+        raise ValueError("grid: expected at least one grid point")
+    path = Path(scene)
+    scene_ref = str(path.resolve()) if (path.suffix == ".toml" or path.exists()) else str(scene)
+    out_dir = Path(out_dir).resolve()
+    tasks = []
+    for i, point in enumerate(grid):
+        s = load_scene(scene_ref, {**dict(base_overrides or {}), **dict(point)})
+        tasks.append(StudyTask(i, dict(s.raw), s.source, s.name, dict(point), str(out_dir / f"run_{i:03d}")))
+    return tasks
+
+
+def _plain(obj):
+    """numpy scalars/arrays inside dicts and lists -> Python floats, ints and lists."""
+    if isinstance(obj, dict):
+        return {k: _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
+def _one_line(exc: BaseException) -> str:
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__
+
+
+def _failed_row(task: StudyTask, exc: BaseException) -> dict:
+    summary_path = Path(task.run_dir) / "summary.json"
+    summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+    return {"run": task.index, "overrides": task.overrides, "status": "failed", "steps": None, "rhs_evals": None,
+            "wall_time_s": summary.get("wall_time_s"), "t_reached": summary.get("t_reached"), "final": None,
+            "error": _one_line(exc), "run_dir": task.run_dir}
+
+
+def run_task(task: StudyTask) -> dict:
+    """Run one grid point (in this process) and return its row.
+
+    Parameters
+    ----------
+    task : StudyTask
+
+    Returns
+    -------
+    dict
+        ``run, overrides, status ("ok" | "failed"), steps, rhs_evals, wall_time_s,
+        t_reached, final (the summary's final fields, e.g. tip (3,) or R (3, 3) and
+        omega_body (3,); None if failed), error (one line or None), run_dir``.
+    """
+    try:
+        scene = build_scene(task.given, task.source, task.name)
+        res = run_scene(scene, Path(task.run_dir), quiet=True)
+    except (RunError, SceneError) as exc:
+        return _failed_row(task, exc)
+    s = res.summary
+    return _plain({"run": task.index, "overrides": task.overrides, "status": s["status"], "steps": s.get("steps"),
+                   "rhs_evals": s.get("rhs_evals"), "wall_time_s": s.get("wall_time_s"),
+                   "t_reached": s.get("t_reached"), "final": s.get("final"), "error": None,
+                   "run_dir": task.run_dir})
+
+
+def _gather(client, tasks: list[StudyTask]) -> list[dict]:
+    futures = client.map(run_task, tasks, pure=False)
+    return client.gather(futures)
+
+
+def _run_dask(tasks: list[StudyTask], scheduler: str | None, n_workers: int) -> list[dict]:
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise ImportError(f'parallel studies need dask[distributed] (pip install "dask[distributed]"), '
+                          f"or run serially: {exc}") from exc
+    if scheduler:
+        with Client(scheduler) as client:
+            return _gather(client, tasks)
+    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        return _gather(client, tasks)
+
+
+def run_study(scene: str | Path, base_overrides: Mapping[str, Any] | None, grid: Sequence[Mapping[str, Any]],
+              out_dir: str | Path, scheduler: str | None = None, n_workers: int = 2,
+              serial: bool = False) -> list[dict]:
+    """Run a scene at every grid point; one row per run, in grid order.
+
+    Parameters
+    ----------
+    scene : str or Path
+        Scene file or built-in name.
+    base_overrides : mapping, optional
+        Overrides common to all runs.
+    grid : sequence of mapping
+        Grid points, e.g. from :func:`expand_grid`.
+    out_dir : str or Path
+        Study directory; run ``i`` writes ``out_dir/run_{i:03d}/`` (history.csv,
+        summary.json, plots).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``"tcp://host:8786"``). Default: a
+        ``LocalCluster`` of ``n_workers`` single-threaded processes, created and closed
+        here.
+    n_workers : int
+        Worker processes of the local cluster (ignored with ``scheduler`` or ``serial``).
+    serial : bool
+        Run in this process, one after the other, without Dask (same rows up to timing).
+
+    Returns
+    -------
+    list of dict
+        Rows of :func:`run_task`.
+
+    Raises
+    ------
+    SceneError
+        An invalid grid point, before any run starts.
+    ValueError
+        An empty grid or ``n_workers < 1``.
+    ImportError
+        Dask is needed (``serial=False``) but not installed.
+    """
+    if not serial and scheduler is None and (int(n_workers) != n_workers or n_workers < 1):
+        raise ValueError(f"n_workers: expected an integer >= 1, got {n_workers!r}")
+    tasks = prepare_tasks(scene, base_overrides, grid, out_dir)
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    if serial:
+        return [run_task(t) for t in tasks]
+    return _run_dask(tasks, scheduler, int(n_workers))
+
+
+# ---------------------------------------------------------------------- convergence
+def default_quantity(row: Mapping) -> str:
+    """``"tip"`` for beams, ``"R+omega_body"`` for rigid bodies (from a row's ``final``).
+
+    Raises
+    ------
+    ValueError
+        The row has no final state or neither field set.
+    """
+    final = row.get("final") or {}
+    if "tip" in final:
+        return "tip"
+    if "R" in final and "omega_body" in final:
+        return "R+omega_body"
+    raise ValueError(f"run {row.get('run')}: no final 'tip' or 'R'/'omega_body' to compare; give a quantity")
+
+
+def quantity_vector(row: Mapping, quantity: str) -> np.ndarray:
+    """A row's final ``quantity`` as a flat vector.
+
+    Parameters
+    ----------
+    row : mapping
+        A successful study row.
+    quantity : str
+        A field of ``row["final"]`` (``"tip"``, ``"energy"``, ``"R"``, ...) or several
+        joined by ``+`` (``"R+omega_body"``), concatenated after flattening.
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,)
+    """
+    final = row.get("final") or {}
+    parts = []
+    for name in quantity.split("+"):
+        if name not in final:
+            raise ValueError(f"run {row.get('run')}: final state has no {name!r}; available: {', '.join(final)}")
+        parts.append(np.ravel(np.asarray(final[name], dtype=float)))
+    return np.concatenate(parts)
+
+
+def _param_value(row: Mapping, param: str) -> float:
+    value = (row.get("overrides") or {}).get(param)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"run {row.get('run')}: override {param!r} = {value!r}: expected a finite number "
+                         f"(is {param!r} a grid key?)")
+    return float(value)
+
+
+def _pick_reference(rows: Sequence[Mapping], param: str, reference: str) -> Mapping:
+    ok = [r for r in rows if r.get("status") == "ok"]
+    if not ok:
+        raise ValueError("no successful run to use as the reference")
+    values = [_param_value(r, param) for r in ok]
+    best = min(values) if reference in ("finest", "smallest") else max(values)
+    if values.count(best) > 1:
+        raise ValueError(f"several runs have {param} = {best!r}; select one study line (or pass a reference row)")
+    return ok[values.index(best)]
+
+
+def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapping = "finest",
+                      quantity: str = "tip") -> list[dict]:
+    """Error of each run's final ``quantity`` against a reference run.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        Study rows (:func:`run_study`); ``param`` must be one of their overrides.
+    param : str
+        The varied key, e.g. ``"integrator.dt"``.
+    reference : {"finest", "smallest", "largest"} or dict
+        ``"finest"`` (= ``"smallest"``): the successful run with the smallest ``param``
+        (dt-like parameters); ``"largest"``: the largest (``space.n_ctrl``-like); or an
+        explicit reference row (e.g. from a separate, finer run).
+    quantity : str
+        Final-state field(s) compared (see :func:`quantity_vector`); ``"auto"`` picks
+        :func:`default_quantity` of the reference.
+
+    Returns
+    -------
+    list of dict
+        One entry per run except the reference, in row order: ``run, param, value,
+        quantity, status, error (Euclidean norm of the difference; None if the run
+        failed), rel_error (error / |reference|), wall_time_s, steps, rhs_evals,
+        reference_run``.
+
+    Raises
+    ------
+    ValueError
+        No usable reference, non-numeric ``param`` values, an unknown quantity.
+    """
+    if isinstance(reference, str):
+        if reference not in ("finest", "smallest", "largest"):
+            raise ValueError(f"reference: expected 'finest', 'smallest', 'largest' or a row, got {reference!r}")
+        ref = _pick_reference(rows, param, reference)
+    else:
+        ref = reference
+        if ref.get("status") != "ok":
+            raise ValueError(f"reference row (run {ref.get('run')}) did not succeed")
+    if quantity == "auto":
+        quantity = default_quantity(ref)
+    q_ref = quantity_vector(ref, quantity)
+    scale = float(np.linalg.norm(q_ref))
+    table = []
+    for row in rows:
+        if row is ref:
+            continue
+        err = None
+        if row.get("status") == "ok":
+            err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
+        table.append({"run": row.get("run"), "param": param, "value": _param_value(row, param), "quantity": quantity,
+                      "status": row.get("status"), "error": err,
+                      "rel_error": None if err is None or scale == 0.0 else err / scale,
+                      "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"),
+                      "rhs_evals": row.get("rhs_evals"), "reference_run": ref.get("run")})
+    return table
+
+
+def fit_rate(xs: Sequence[float], errs: Sequence[float]) -> float:
+    """Least-squares slope of ``log(err)`` against ``log(x)`` (the observed order).
+
+    Parameters
+    ----------
+    xs : sequence of float, shape (k,)
+        Positive parameter values (at least two distinct).
+    errs : sequence of float, shape (k,)
+        Positive errors.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        Fewer than 3 points, non-positive or non-finite values, or all ``xs`` equal.
+    """
+    x, e = np.asarray(xs, dtype=float), np.asarray(errs, dtype=float)
+    if x.ndim != 1 or x.shape != e.shape:
+        raise ValueError(f"xs and errs: expected two 1-d arrays of the same length, got {x.shape} and {e.shape}")
+    if x.size < 3:
+        raise ValueError(f"fit_rate: expected at least 3 points, got {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(e)) and np.all(x > 0) and np.all(e > 0)):
+        raise ValueError("fit_rate: expected finite, positive parameter values and errors")
+    if np.all(x == x[0]):
+        raise ValueError("fit_rate: all parameter values are equal")
+    return float(np.polyfit(np.log(x), np.log(e), 1)[0])
+
+
+def table_rate(table: Sequence[Mapping]) -> float:
+    """:func:`fit_rate` over a convergence table's entries with a positive error.
+
+    Raises
+    ------
+    ValueError
+        Fewer than 3 such entries.
+    """
+    used = [t for t in table if t.get("error") is not None and t["error"] > 0]
+    return fit_rate([t["value"] for t in used], [t["error"] for t in used])
+
+
+# ---------------------------------------------------------------------- output
+def _flat_final(final: Mapping | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, value in (final or {}).items():
+        a = np.asarray(value)
+        if a.ndim == 0:
+            out[f"final.{name}"] = value
+        else:
+            out.update({f"final.{name}.{i}": float(x) for i, x in enumerate(a.ravel())})
+    return out
+
+
+def _csv_rows(rows: Sequence[Mapping]) -> tuple[list[str], list[dict]]:
+    """Flat CSV records: ``run``, the override keys, the row fields, ``final.*``."""
+    flat = []
+    for row in rows:
+        rec = {"run": row.get("run"), **dict(row.get("overrides") or {})}
+        rec.update({k: row.get(k) for k in ROW_FIELDS if k != "run"})
+        rec.update(_flat_final(row.get("final")))
+        flat.append(rec)
+    override_keys = list(dict.fromkeys(k for row in rows for k in (row.get("overrides") or {})))
+    final_keys = list(dict.fromkeys(k for rec in flat for k in rec if k.startswith("final.")))
+    header = ["run", *override_keys, *[k for k in ROW_FIELDS if k not in ("run", "error", "run_dir")],
+              *final_keys, "error", "run_dir"]
+    return header, flat
+
+
+def _csv_value(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, (list, tuple, dict)):
+        return json.dumps(v)
+    return str(v)
+
+
+def _write_csv(path: Path, header: list[str], records: Sequence[Mapping]) -> Path:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for rec in records:
+            w.writerow([_csv_value(rec.get(k)) for k in header])
+    return path
+
+
+def _positive_errors(table: Sequence[Mapping]) -> list[Mapping]:
+    return [t for t in table if t.get("error") is not None and t["error"] > 0]
+
+
+def plot_convergence(table: Sequence[Mapping], path: Path) -> Path:
+    """Error against the varied parameter (log-log), with the fitted slope if >= 3 points."""
+    from .io.plots import _pyplot
+
+    plt = _pyplot()
+    used = _positive_errors(table)
+    x = np.array([t["value"] for t in used])
+    e = np.array([t["error"] for t in used])
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ax.loglog(x, e, "o-", label=f"error in {used[0]['quantity']}")
+    try:
+        rate = fit_rate(x, e)
+    except ValueError:
+        rate = None
+    if rate is not None:
+        c = np.polyfit(np.log(x), np.log(e), 1)[1]
+        xf = np.array([x.min(), x.max()])
+        ax.loglog(xf, np.exp(c) * xf**rate, "k--", label=f"fitted slope {rate:.2f}")
+    ax.set_xlabel(used[0]["param"])
+    ax.set_ylabel(f"|error| (reference: run {used[0]['reference_run']})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_work_precision(table: Sequence[Mapping], path: Path) -> Path:
+    """Error against wall time (log-log), one point per run, labelled by the parameter."""
+    from .io.plots import _pyplot
+
+    plt = _pyplot()
+    used = [t for t in _positive_errors(table) if t.get("wall_time_s")]
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    ax.loglog([t["wall_time_s"] for t in used], [t["error"] for t in used], "o-", label=f"error in {used[0]['quantity']}")
+    for t in used:
+        ax.annotate(f"{t['value']:.3g}", (t["wall_time_s"], t["error"]), textcoords="offset points", xytext=(4, 4),
+                    fontsize=8)
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("|error|")
+    ax.set_title(f"work-precision ({used[0]['param']})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Mapping] | None = None) -> list[Path]:
+    """Write a study's results.
+
+    Files: ``study.csv`` (one line per run: run, override keys, status, steps,
+    rhs_evals, wall_time_s, t_reached, flattened ``final.*`` fields, error, run_dir) and
+    ``study.json`` (``{"rows", "convergence", "rate"}``). With a ``table`` also
+    ``convergence.csv``, ``convergence.png`` (error vs parameter, log-log, fitted slope
+    in the legend when >= 3 positive errors) and ``work_precision.png`` (error vs wall
+    time), the PNGs only when some error is positive.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    rows : sequence of dict
+        From :func:`run_study`.
+    table : sequence of dict, optional
+        From :func:`convergence_table`.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    header, records = _csv_rows(rows)
+    written = [_write_csv(out_dir / "study.csv", header, records)]
+    rate = None
+    if table:
+        try:
+            rate = table_rate(table)
+        except ValueError:
+            rate = None
+    doc = {"rows": _plain(list(rows)), "convergence": _plain(list(table)) if table is not None else None, "rate": rate}
+    (out_dir / "study.json").write_text(json.dumps(doc, indent=2) + "\n")
+    written.append(out_dir / "study.json")
+    if table:
+        keys = list(dict.fromkeys(k for t in table for k in t))
+        written.append(_write_csv(out_dir / "convergence.csv", keys, table))
+        if _positive_errors(table):
+            written.append(plot_convergence(table, out_dir / "convergence.png"))
+            if any(t.get("wall_time_s") for t in _positive_errors(table)):
+                written.append(plot_work_precision(table, out_dir / "work_precision.png"))
+    return written
