@@ -14,7 +14,7 @@ is smaller for larger angles. Below 1 rad the 12-term Taylor polynomials have tr
 error below 1e-17 (``D`` has radius of convergence ``2 pi``; its terms shrink by
 ``(theta / 2 pi)**2`` each, i.e. 0.025 at 1 rad). ``tests/groups`` measures the relative
 error of every coefficient against 50-digit mpmath values on ``[0, pi]`` and asserts
-<= 1e-12; ``tests/groups/test_series_sympy.py`` checks the Taylor coefficients against
+<= 1e-12; ``tests/groups/test_groups_series_sympy.py`` checks the Taylor coefficients against
 sympy expansions of the closed forms.
 
 Definitions (theta = |xi|)::
