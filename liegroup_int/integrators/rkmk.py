@@ -27,9 +27,14 @@ def combine(weights: np.ndarray, K: np.ndarray, h: float, total: float | None = 
     cancellation error shrinks with the step.
     """
     n = weights.shape[0]
+    shape = K.shape[1:]
     if total is None or n == 1:
-        return h * np.tensordot(weights, K[:n], axes=1)
-    return h * (total * K[0] + np.tensordot(weights[1:], K[1:n] - K[0], axes=1))
+        return (h * (weights @ K[:n].reshape(n, -1))).reshape(shape)
+    d = (K[1:n] - K[0]).reshape(n - 1, -1)
+    out = weights[1:] @ d
+    out += total * K[0].reshape(-1)
+    out *= h
+    return out.reshape(shape)
 
 
 def compute_stages(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray) -> None:

@@ -37,7 +37,7 @@ def _end_keys(end: str) -> list[Key]:
         Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load)", "N"),
         Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial)", "N m"),
         Key(f"loads.{end}.profile", "str", "constant", f"time profile of the {end} loads",
-            choices=("constant", "step", "ramp", "table")),
+            choices=("constant", "step", "ramp", "smooth", "table")),
         Key(f"loads.{end}.t_on", "float", 0.0, "profile switch-on time (step, ramp)", "s", non_negative),
         Key(f"loads.{end}.t_off", "float", float("inf"), "profile switch-off time (step, ramp)", "s", positive),
         Key(f"loads.{end}.ramp", "float", 1.0, "ramp duration (ramp)", "s", positive),
@@ -58,6 +58,8 @@ KEYS = {
         Key("geometry.knots", "floats", (0.0,), "NURBS knot vector (default open uniform)"),
         Key("geometry.reference_vector", "vec3", ZERO,
             "vector defining the section axis d1 (projected normal to the tangent); 0 = automatic"),
+        Key("integrator.backend", "str", "numba", "stage kernels: compiled (numba) or plain NumPy",
+            choices=("numba", "numpy")),
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
@@ -84,6 +86,12 @@ KEYS = {
         Key("loads.gravity", "vec3", ZERO, "gravitational acceleration (adds rho A g per length)", "m/s^2"),
         Key("loads.distributed_force", "vec3", ZERO, "force per length, spatial", "N/m"),
         Key("loads.distributed_couple", "vec3", ZERO, "couple per length, spatial", "N m/m"),
+        Key("loads.profile", "str", "constant", "time profile of the distributed loads (and gravity)",
+            choices=("constant", "step", "ramp", "smooth", "table")),
+        Key("loads.t_on", "float", 0.0, "distributed-load profile switch-on time", "s", non_negative),
+        Key("loads.t_off", "float", float("inf"), "distributed-load profile switch-off time", "s", positive),
+        Key("loads.ramp", "float", 1.0, "distributed-load ramp duration (ramp, smooth)", "s", positive),
+        Key("loads.table", "table", ((0.0, 1.0), (1.0, 1.0)), "distributed-load [t, factor] points (table)"),
         *_end_keys("start"),
         *_end_keys("end"),
         Key("initial.velocity", "vec3", ZERO, "uniform initial velocity", "m/s"),
@@ -173,14 +181,18 @@ def constants(scene: Scene) -> SectionConstants:
         raise SceneError(f"{scene.source}: key '{prefix}.{name}': {msg.strip()}") from None
 
 
-def _end_load(scene: Scene, end: str) -> EndLoad:
-    pre = f"loads.{end}"
+def _profile(scene: Scene, pre: str) -> Profile:
     try:
-        prof = Profile(kind=scene[f"{pre}.profile"], t_on=scene[f"{pre}.t_on"], t_off=scene[f"{pre}.t_off"],
+        return Profile(kind=scene[f"{pre}.profile"], t_on=scene[f"{pre}.t_on"], t_off=scene[f"{pre}.t_off"],
                        ramp=scene[f"{pre}.ramp"], table=scene[f"{pre}.table"])
     except ValueError as exc:
         name, _, msg = str(exc).partition(":")
         raise SceneError(f"{scene.source}: key '{pre}.{name}': {msg.strip()}") from None
+
+
+def _end_load(scene: Scene, end: str) -> EndLoad:
+    pre = f"loads.{end}"
+    prof = _profile(scene, pre)
     return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof)
 
 
@@ -193,12 +205,13 @@ def problem(scene: Scene) -> BeamProblem:
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key 'geometry.reference_vector': {exc}") from None
     loads = Loads(distributed_force=scene["loads.distributed_force"], gravity=scene["loads.gravity"],
-                  distributed_couple=scene["loads.distributed_couple"], start=_end_load(scene, "start"),
+                  distributed_couple=scene["loads.distributed_couple"],
+                  distributed_profile=_profile(scene, "loads"), start=_end_load(scene, "start"),
                   end=_end_load(scene, "end"))
     bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"])
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     try:
-        return BeamProblem(space, constants(scene), bcs, loads, ic)
+        return BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
 

@@ -634,6 +634,10 @@ class NumbaBeamKernels:
         self.sf, self.si = sf, si
         # positions in ``sf`` (not views: they would not survive pickling)
         self._profiles = [(offs["endf"] + k * _NEF + col, vec, prof) for k, col, vec, prof in profiles]
+        dprof = pb.loads.distributed_profile
+        if not dprof.is_constant:  # distributed loads with a time profile
+            self._profiles += [(offs["prm"] + _P_Q, np.asarray(pb.q, float), dprof),
+                               (offs["prm"] + _P_M, np.asarray(pb.m_dist, float), dprof)]
         self._t_loads = None
         self._zero = np.zeros((4, n, 3))
 

@@ -157,11 +157,13 @@ class Profile:
 
     Parameters
     ----------
-    kind : {"constant", "step", "ramp", "table"}
+    kind : {"constant", "step", "ramp", "smooth", "table"}
         ``constant``: 1; ``step``: 1 for ``t_on <= t < t_off``, else 0; ``ramp``: rises
         linearly from 0 at ``t_on`` to 1 at ``t_on + ramp``, then stays (and drops to 0 at
-        ``t_off``); ``table``: piecewise linear through ``table`` points ``(t, factor)``,
-        constant beyond its ends.
+        ``t_off``); ``smooth``: like ``ramp`` but ``sin^2(pi/2 x)`` with
+        ``x = (t - t_on)/ramp`` (zero slope at both ends, so it hardly excites the top of
+        the spectrum); ``table``: piecewise linear through ``table`` points
+        ``(t, factor)``, constant beyond its ends.
     """
 
     kind: str = "constant"
@@ -171,9 +173,9 @@ class Profile:
     table: tuple = ()
 
     def __post_init__(self):
-        if self.kind not in ("constant", "step", "ramp", "table"):
-            raise ValueError(f"profile: expected constant, step, ramp or table, got {self.kind!r}")
-        if self.kind == "ramp" and not self.ramp > 0:
+        if self.kind not in ("constant", "step", "ramp", "smooth", "table"):
+            raise ValueError(f"profile: expected constant, step, ramp, smooth or table, got {self.kind!r}")
+        if self.kind in ("ramp", "smooth") and not self.ramp > 0:
             raise ValueError(f"ramp: expected a positive ramp duration, got {self.ramp!r}")
         if self.kind == "table" and len(self.table) < 2:
             raise ValueError("table: expected at least two (t, factor) points")
@@ -190,7 +192,8 @@ class Profile:
             return 0.0
         if self.kind == "step":
             return 1.0
-        return min(1.0, (t - self.t_on) / self.ramp)
+        x = min(1.0, (t - self.t_on) / self.ramp)
+        return x if self.kind == "ramp" else float(np.sin(0.5 * np.pi * x) ** 2)
 
     @property
     def is_constant(self) -> bool:
@@ -223,6 +226,8 @@ class Loads:
         Acceleration [m/s^2]; adds ``mu * gravity`` to the distributed force.
     distributed_couple : (3,) tuple
         Couple per length [N m/m], spatial frame.
+    distributed_profile : Profile
+        Time profile of the distributed force, gravity and couple.
     start, end : EndLoad
         Loads at ``s = 0`` and ``s = L`` (only where that end is not clamped).
     """
@@ -230,6 +235,7 @@ class Loads:
     distributed_force: tuple = (0.0, 0.0, 0.0)
     gravity: tuple = (0.0, 0.0, 0.0)
     distributed_couple: tuple = (0.0, 0.0, 0.0)
+    distributed_profile: Profile = field(default_factory=Profile)
     start: EndLoad = field(default_factory=EndLoad)
     end: EndLoad = field(default_factory=EndLoad)
 

@@ -241,10 +241,11 @@ class BeamProblem(Problem):
         n_s = rot(R, cross(K, N) + self.CN * gam_s)
         Om = rot_T(R, w_c)
         tq = -cross(Om, self.Jm * Om) + cross(K, M) + self.CM * KM_s + cross(Rt_cs, N)
+        f = self.loads.distributed_profile(t) if (self.has_q or self.has_m) else 0.0
         if self.has_q:
-            n_s = n_s + self.q
+            n_s = n_s + f * self.q
         if self.has_m:
-            tq = tq + rot_T(R, np.broadcast_to(self.m_dist, tq.shape))
+            tq = tq + rot_T(R, np.broadcast_to(f * self.m_dist, tq.shape))
         for e in self.neumann_ends:
             i, ld = e.index, e.load
             if e.force_neumann:
@@ -274,7 +275,7 @@ class BeamProblem(Problem):
         Om = rot_T(R, w_c)
         kin = 0.5 * (self.mu * np.sum(v_c**2, axis=1) + np.sum(self.Jm * Om**2, axis=1))
         strain = 0.5 * (np.sum(self.CN * gam**2, axis=1) + np.sum(self.CM * KM**2, axis=1))
-        pot = -(c_c @ self.q) if self.has_q else np.zeros(self.n)
+        pot = -(c_c @ self.q) * self.loads.distributed_profile(0.0) if self.has_q else np.zeros(self.n)
         potential = float(self.quad @ pot)
         for e in self.neumann_ends:
             ld = e.load
