@@ -28,6 +28,10 @@ def _parser() -> argparse.ArgumentParser:
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    pl = sub.add_parser("plot", help="plot a run directory (history, deformed shapes) as PNG and PDF")
+    pl.add_argument("dir", type=Path, help="output directory of a run")
+    pl.add_argument("--times", type=float, nargs="+", default=None, metavar="T",
+                    help="times of the deformed shapes (nearest recorded outputs)")
     sc = sub.add_parser("scenes", help="list the built-in scenes")
     sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
     return p
@@ -54,6 +58,16 @@ def main(argv: list[str] | None = None) -> int:
                 return 0
             for name, desc in builtin_descriptions().items():
                 print(f"{name:24s} {desc}")
+            return 0
+        if args.command == "plot":
+            from .io import plot_run
+
+            try:
+                made = plot_run(args.dir, args.times)
+            except FileNotFoundError as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 2
+            print("\n".join(str(p) for p in made))
             return 0
         if args.command == "validate":
             scene = _load(args)

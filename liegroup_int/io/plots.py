@@ -82,3 +82,41 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def plot_run(run_dir: Path, times=None, formats=("png", "pdf")) -> list[Path]:
+    """Plots of a finished (or interrupted) run directory.
+
+    Writes ``plot_history.{fmt}`` from ``history.csv`` and, when ``shapes.npz`` exists,
+    ``plot_shapes.{fmt}`` at the requested ``times`` (nearest recorded output times; six
+    spread over the run by default); for a study directory (``study.csv``), the
+    convergence and work-precision figures are re-drawn by :mod:`liegroup_int.studies`.
+
+    Returns
+    -------
+    list of Path
+        Files written.
+    """
+    from .history import read_history
+
+    run_dir = Path(run_dir)
+    made: list[Path] = []
+    hist = run_dir / "history.csv"
+    if not hist.exists():
+        raise FileNotFoundError(f"{run_dir}: no history.csv (not a run directory)")
+    data = read_history(hist)
+    for fmt in formats:
+        made.append(plot_history(data, run_dir / f"plot_history.{fmt}", title=run_dir.name))
+    shapes = run_dir / "shapes.npz"
+    if shapes.exists():
+        with np.load(shapes) as z:
+            t, line = z["t"], z["centreline"]
+        if times is not None:
+            idx = np.unique([int(np.argmin(np.abs(t - x))) for x in times])
+            t, line = t[idx], line[idx]
+            n = len(idx)
+        else:
+            n = 6
+        for fmt in formats:
+            made.append(plot_shapes(t, line, run_dir / f"plot_shapes.{fmt}", n_shapes=n, title=run_dir.name))
+    return made

@@ -126,3 +126,13 @@ def test_scene_reference_is_current(capsys):
 
     doc = Path(__file__).resolve().parents[2] / "docs" / "scenes.md"
     assert doc.read_text().strip() == schema_markdown().strip(), "regenerate: liegroup-int scenes --reference > docs/scenes.md"
+
+
+def test_plot_command_writes_png_and_pdf(tmp_path, capsys):
+    out = tmp_path / "p"
+    assert main(["run", "pendulum", "--quiet", "--out", str(out), "--set", "t_end=0.01", "--set", "output.every=0.002"]) == 0
+    assert main(["plot", str(out), "--times", "0", "0.01"]) == 0
+    for name in ("plot_history.png", "plot_history.pdf", "plot_shapes.png", "plot_shapes.pdf"):
+        assert (out / name).stat().st_size > 1000
+    assert main(["plot", str(tmp_path / "nothing")]) == 2
+    assert "no history.csv" in capsys.readouterr().err
