@@ -47,6 +47,12 @@ class Problem(ABC):
         """``dexpinv_u(f(t, y))`` where ``y = Lambda(u, y_n)``."""
         return self.dexpinv(u, self.vector_field(t, y))
 
+    def end_step(self, y):
+        """Called on the state that ends an accepted step (not on stage states); returns
+        the state to continue from. Default: unchanged. Problems may remove round-off
+        drift here (the beam re-orthonormalizes its rotations)."""
+        return y
+
     def increment_scale(self, y) -> np.ndarray:
         """Typical size of each increment component at ``y``, for error norms.
 

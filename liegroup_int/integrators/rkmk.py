@@ -54,7 +54,7 @@ def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: n
     """
     compute_stages(problem, tab, t, y, h, K)
     u = combine(tab.b_f, K, h, 1.0)
-    return problem.action(u, y), u
+    return problem.end_step(problem.action(u, y)), u
 
 
 def error_estimate(tab: ButcherTableau, K: np.ndarray, h: float) -> np.ndarray:

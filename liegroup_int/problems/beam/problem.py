@@ -194,6 +194,17 @@ class BeamProblem(Problem):
         K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, th_ss)
         return BeamState(y.c + u[0], y.v + u[2], y.w + u[3], exp_so3(th_c) @ y.R, K, K_s)
 
+    def end_step(self, y: BeamState) -> BeamState:
+        """One Newton-Schulz step toward the nearest rotation, ``R <- R (3 I - R^T R) / 2``.
+
+        ``R = exp(hat(theta)) R_n`` is orthogonal up to round-off, but the round-off
+        accumulates (measured ~6e-12 after 2e5 steps); the correction is quadratic in the
+        orthogonality error, so it changes R by ~1e-24 and keeps it at ~1e-15 for ever.
+        """
+        R = y.R
+        y.R = 0.5 * R @ (3.0 * np.eye(3) - np.swapaxes(R, -1, -2) @ R)
+        return y
+
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
         """``dexpinv`` on control values: pointwise at the collocation points on the
         rotational component, then projected back with ``M_c^-1``."""
