@@ -28,6 +28,23 @@ def _parser() -> argparse.ArgumentParser:
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    for name, helptext in (("converge", "run a scene over values of one key and fit the convergence rate"),
+                           ("sweep", "run a scene over a grid of key values")):
+        st = sub.add_parser(name, help=helptext)
+        st.add_argument("scene")
+        if name == "converge":
+            st.add_argument("--param", required=True, metavar="KEY", help="the key to vary, e.g. integrator.dt")
+            st.add_argument("--values", required=True, nargs="+", metavar="V", help="its values")
+            st.add_argument("--quantity", default="auto",
+                            help="final field(s) compared, e.g. tip or R+omega_body (default: by problem)")
+        else:
+            st.add_argument("--grid", required=True, nargs="+", metavar="KEY=V1,V2", help="grid axes")
+        st.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+        st.add_argument("--out", type=Path, default=None, help="study directory (default: studies/SCENE-<command>)")
+        st.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="address of a running Dask scheduler (default: a local cluster of processes)")
+        st.add_argument("--workers", type=int, default=2, help="local cluster size")
+        st.add_argument("--serial", action="store_true", help="run in this process, without Dask")
     pl = sub.add_parser("plot", help="plot a run directory (history, deformed shapes) as PNG and PDF")
     pl.add_argument("dir", type=Path, help="output directory of a run")
     pl.add_argument("--times", type=float, nargs="+", default=None, metavar="T",
@@ -46,6 +63,43 @@ def _load(args):
     return load_scene(args.scene, overrides)
 
 
+def _study(args) -> int:
+    from . import studies
+
+    overrides = dict(parse_override(s) for s in args.overrides)
+    name = Path(args.scene).stem
+    out = args.out if args.out is not None else Path("studies") / f"{name}-{args.command}"
+    if args.command == "converge":
+        grid = studies.expand_grid({args.param: studies.parse_values(args.param, args.values)})
+    else:
+        grid = studies.expand_grid(studies.parse_grid(args.grid))
+    try:
+        rows = studies.run_study(args.scene, overrides, grid, out, scheduler=args.scheduler, n_workers=args.workers,
+                                 serial=args.serial)
+    except ImportError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    table = None
+    if args.command == "converge":
+        table = studies.convergence_table(rows, args.param, quantity=args.quantity)
+    studies.write_study(out, rows, table)
+    failed = [r for r in rows if r["status"] != "ok"]
+    for r in rows:
+        wall = r["wall_time_s"]
+        print(f"{r['run']:>4}  {r['overrides']}  {r['status']}  steps={r['steps']}  "
+              f"wall={'-' if wall is None else format(wall, '.3g')} s")
+    if table is not None:
+        for e in table:
+            if e["error"] is not None:
+                print(f"  {args.param} = {e['value']!r}: error {e['error']:.3e} (against run {e['reference_run']})")
+        try:
+            print(f"fitted rate: {studies.table_rate(table):.3f}")
+        except ValueError as exc:
+            print(f"no rate fitted: {exc}")
+    print(f"-> {out}")
+    return 3 if failed else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
@@ -59,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
             for name, desc in builtin_descriptions().items():
                 print(f"{name:24s} {desc}")
             return 0
+        if args.command in ("converge", "sweep"):
+            return _study(args)
         if args.command == "plot":
             from .io import plot_run
 

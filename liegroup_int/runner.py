@@ -235,6 +235,15 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     shapes = None
     if sim.snapshot is not None:
         observers.append(sim.snapshot)
+    from .problems.beam import BeamProblem
+
+    if scene.output.paraview and isinstance(sim.problem, BeamProblem):
+        from .io.paraview import BeamParaViewWriter
+
+        pv = BeamParaViewWriter(out_dir, sim.problem)
+        if resume is not None:
+            pv.resume_after(t0 + 1e-9 * every)
+        observers.append(pv)
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
     observers.append(ckpt)

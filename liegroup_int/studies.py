@@ -559,7 +559,8 @@ def plot_work_precision(table: Sequence[Mapping], path: Path) -> Path:
     plt = _pyplot()
     used = [t for t in _positive_errors(table) if t.get("wall_time_s")]
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    ax.loglog([t["wall_time_s"] for t in used], [t["error"] for t in used], "o-", label=f"error in {used[0]['quantity']}")
+    wall, err = [t["wall_time_s"] for t in used], [t["error"] for t in used]
+    ax.loglog(wall, err, "o-", label=f"error in {used[0]['quantity']}")
     for t in used:
         ax.annotate(f"{t['value']:.3g}", (t["wall_time_s"], t["error"]), textcoords="offset points", xytext=(4, 4),
                     fontsize=8)
@@ -607,7 +608,8 @@ def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Ma
             rate = table_rate(table)
         except ValueError:
             rate = None
-    doc = {"rows": _plain(list(rows)), "convergence": _plain(list(table)) if table is not None else None, "rate": rate}
+    convergence = _plain(list(table)) if table is not None else None
+    doc = {"rows": _plain(list(rows)), "convergence": convergence, "rate": rate}
     (out_dir / "study.json").write_text(json.dumps(doc, indent=2) + "\n")
     written.append(out_dir / "study.json")
     if table:

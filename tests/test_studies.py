@@ -36,7 +36,6 @@ def serial_rows(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def dask_rows(tmp_path_factory):
-    pytest.importorskip("dask.distributed")
     out = tmp_path_factory.mktemp("study_dask")
     return out, run_study("heavy_top", BASE, expand_grid({"integrator.dt": DTS}), out, n_workers=2)
 

@@ -292,6 +292,16 @@ class BeamParaViewWriter:
         frames = y.R if self._u is None else interpolate_frames(self._u_c, np.asarray(y.R), self._u)
         return points, frames
 
+    def resume_after(self, t: float) -> None:
+        """Continue the series of an existing ``beam.pvd`` from the entries up to ``t``."""
+        import xml.etree.ElementTree as ET
+
+        if not self.pvd.exists():
+            return
+        root = ET.parse(self.pvd).getroot()
+        self.entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")
+                        if float(d.get("timestep")) <= t]
+
     def __call__(self, t: float, y) -> None:
         k = len(self.entries) if self.every_output else 0
         name = f"beam_{k:05d}.vtu"

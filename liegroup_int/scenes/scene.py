@@ -33,6 +33,7 @@ class OutputSpec:
     quantities: tuple[str, ...]
     hdf5: bool = True
     checkpoint_every: float = 60.0
+    paraview: bool = True
 
 
 @dataclass(frozen=True)
@@ -121,6 +122,7 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("output.every", "float", None, "simulated time between recorded rows (default t_end/200)", "s", positive),
         Key("output.quantities", "strs", kind.default_quantities, "recorded quantities", choices=kind.quantities),
         Key("output.hdf5", "bool", True, "also stream history and state snapshots to results.h5"),
+        Key("output.paraview", "bool", True, "beams: write a VTU file per output time and the index beam.pvd"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
     ]
     return {k.name: k for k in keys}
@@ -167,7 +169,8 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         description=v["description"],
         t_end=v["t_end"],
         integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
-        output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"]),
+        output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"],
+                          v["output.paraview"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
     )

@@ -12,7 +12,7 @@ from liegroup_int.io.paraview import BeamParaViewWriter, interpolate_frames, wri
 from liegroup_int.scenes.beam import problem as beam_problem
 from liegroup_int.scenes.scene import load_scene
 
-meshio = pytest.importorskip("meshio")
+import meshio
 
 DT = 1e-6
 N_STEPS = 20

@@ -19,7 +19,7 @@ Tolerances: 1e-12 of the field scale for ``increment_rate``, ``vector_field`` an
 import numpy as np
 import pytest
 
-pytest.importorskip("numba")
+import numba  # noqa: F401  (a core dependency)
 
 from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
 from liegroup_int.problems.beam import BeamProblem  # noqa: E402

@@ -136,3 +136,18 @@ def test_plot_command_writes_png_and_pdf(tmp_path, capsys):
         assert (out / name).stat().st_size > 1000
     assert main(["plot", str(tmp_path / "nothing")]) == 2
     assert "no history.csv" in capsys.readouterr().err
+
+
+def test_converge_and_sweep_commands(tmp_path, capsys):
+    out = tmp_path / "conv"
+    rc = main(["converge", "heavy_top", "--param", "integrator.dt", "--values", "0.02", "0.01", "0.005", "0.0025",
+               "--set", "t_end=1", "--out", str(out), "--serial"])
+    text = capsys.readouterr().out
+    assert rc == 0 and (out / "study.csv").exists() and (out / "convergence.png").exists()
+    rate = float(text.split("fitted rate:")[1].split()[0])
+    assert abs(rate - 4.0) < 0.4  # RKMK4 (measured 4.04 against the finest run)
+    out2 = tmp_path / "sweep"
+    rc = main(["sweep", "heavy_top", "--grid", "integrator.method=rkmk3,rkmk4", "integrator.dt=0.02,0.01",
+               "--set", "t_end=0.2", "--out", str(out2), "--serial"])
+    assert rc == 0 and len((out2 / "study.csv").read_text().strip().splitlines()) == 5  # header + 4 runs
+    assert main(["sweep", "heavy_top", "--grid", "integrator.dt=-1", "--out", str(tmp_path / "bad"), "--serial"]) == 2
