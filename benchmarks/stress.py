@@ -1,0 +1,121 @@
+"""Stability stress tests: long horizons, fast spin, large rotations, many small steps.
+
+    python benchmarks/stress.py [--quick]
+
+Prints one row per scenario (steps, CPU time, energy drift, orthogonality error, the
+scenario's own figure) and saves ``docs/img/stress_*.png`` (energy drift and
+orthogonality error against time). The fast versions in CI are
+``tests/problems/test_problems_beam_stress.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from liegroup_int.io import read_history
+from liegroup_int.runner import RunError, run_scene
+from liegroup_int.scenes import load_scene
+
+IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
+
+SCENARIOS = {
+    # name: (scene, overrides, quick overrides, note)
+    "pendulum_10s": ("pendulum", {"t_end": 10.0, "output.every": 0.02,
+                                  "output.quantities": ["tip", "energy", "kinetic", "orth_error"]},
+                     {"t_end": 2.0}, "long horizon"),
+    "helix_5s": ("spinning_helix", {"t_end": 5.0, "output.every": 0.01,
+                                    "output.quantities": ["tip", "energy", "kinetic", "angular_momentum", "orth_error"]},
+                 {"t_end": 1.0}, "long horizon; h_z conserved"),
+    "helix_fast_spin": ("spinning_helix", {"t_end": 0.5, "initial.omega": [0.0, 0.0, 62.83185307179586],
+                                           "integrator.dt": "auto", "output.every": 0.005,
+                                           "output.quantities": ["tip", "energy", "kinetic", "angular_momentum",
+                                                                 "orth_error"]},
+                        {"t_end": 0.1}, "10x angular velocity"),
+    "rollup_3_4": ("rollup", {}, {"t_end": 3.5, "loads.end.ramp": 3.0,
+                                  "loads.end.couple": [0.0, 0.0, np.pi * 3.0679615757712823]},
+                   "3/4 circle (quick: half circle)"),
+    "rollup_full": ("rollup", {"loads.end.couple": [0.0, 0.0, 2 * np.pi * 3.0679615757712823],
+                               "space.n_ctrl": 41, "space.degree": 3}, {"t_end": 3.0},
+                    "full circle, n_ctrl=41, p=3"),
+    "pendulum_1e6_steps": ("pendulum", {"integrator.dt": 1e-6, "t_end": 1.0, "output.every": 0.01,
+                                        "output.quantities": ["tip", "energy", "kinetic", "orth_error"]},
+                           {"t_end": 0.1}, "round-off growth over 1e6 steps"),
+}
+
+
+def run(name, quick):
+    scene_name, ov, qov, note = SCENARIOS[name]
+    ov = {**ov, **(qov if quick else {}), "output.hdf5": False}
+    if "orth_error" not in ov.get("output.quantities", ["orth_error"]):
+        ov["output.quantities"] = list(ov["output.quantities"]) + ["orth_error"]
+    scene = load_scene(scene_name, ov)
+    out = Path(tempfile.mkdtemp(prefix=f"stress_{name}_"))
+    t0 = time.process_time()
+    status, err = "ok", ""
+    try:
+        res = run_scene(scene, out)
+        steps = res.summary["steps"]
+    except RunError as exc:
+        status, err, steps = "blow-up", str(exc).split(" (outputs")[0], None
+    cpu = time.process_time() - t0
+    h = read_history(out / "history.csv")
+    row = {"name": name, "note": note, "status": status, "steps": steps, "cpu_s": cpu, "t_reached": float(h["t"][-1]),
+           "error": err}
+    if "energy" in h and len(h["t"]) > 1:
+        scale = max(np.max(np.abs(h.get("kinetic", h["energy"]))), 1e-300)
+        row["energy_drift_rel"] = float(np.max(np.abs(h["energy"] - h["energy"][0])) / scale)
+    if "orth_error" in h:
+        row["orth_max"] = float(np.max(h["orth_error"]))
+    if "h_z" in h:
+        row["hz_drift_rel"] = float(np.max(np.abs(h["h_z"] - h["h_z"][0])) / abs(h["h_z"][0]))
+    plot(name, h)
+    return row
+
+
+def plot(name, h):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.4))
+    if "energy" in h:
+        ax[0].plot(h["t"], h["energy"] - h["energy"][0])
+        ax[0].set_ylabel("E(t) - E(0) [J]")
+    if "orth_error" in h:
+        ax[1].semilogy(h["t"], np.maximum(h["orth_error"], 1e-17))
+        ax[1].set_ylabel("max |R^T R - I|")
+    for a in ax:
+        a.set_xlabel("t [s]")
+        a.grid(alpha=0.3)
+    fig.suptitle(name)
+    fig.tight_layout()
+    IMG.mkdir(parents=True, exist_ok=True)
+    fig.savefig(IMG / f"stress_{name}.png", dpi=100)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--only", nargs="*", default=None)
+    a = ap.parse_args(argv)
+    rows = [run(n, a.quick) for n in (a.only or SCENARIOS)]
+    print(f"{'scenario':20s} {'status':8s} {'steps':>9s} {'CPU s':>8s} {'t reached':>9s} {'dE/Ekin':>9s} "
+          f"{'orth max':>9s} {'dh_z/h_z':>9s}  note")
+    for r in rows:
+        print(f"{r['name']:20s} {r['status']:8s} {str(r['steps']):>9s} {r['cpu_s']:8.1f} {r['t_reached']:9.4g} "
+              f"{r.get('energy_drift_rel', float('nan')):9.2e} {r.get('orth_max', float('nan')):9.2e} "
+              f"{r.get('hz_drift_rel', float('nan')):9.2e}  {r['note']}")
+        if r["error"]:
+            print(f"{'':20s} {r['error']}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()
