@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .integrators import IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method
+from .integrators import BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method
 from .io import HistoryWriter, write_json
 from .io.checkpoint import read_checkpoint, write_checkpoint
 from .scenes import KINDS, Scene, SceneError, load_scene
@@ -123,6 +123,29 @@ class Checkpointer:
             self.save(t, y)
         if self.stop_requested:
             raise Interrupted(f"interrupted at t={t:.6g}; checkpoint written", t, self.stats.steps)
+
+
+class EnergyGuard:
+    """Stops a run whose recorded energy explodes between output times.
+
+    After three outputs, an energy magnitude above ``factor`` times the largest earlier
+    one is taken as a blow-up (a stable run does not grow its energy a thousandfold
+    between two outputs). Uses the value the history writer already computed, so it adds
+    no diagnostic evaluation.
+    """
+
+    def __init__(self, writer: HistoryWriter, factor: float, stats_of):
+        self.writer, self.factor, self.stats_of = writer, factor, stats_of
+        self.scale, self.count = 0.0, 0
+
+    def __call__(self, t, y):
+        e = abs(self.writer.last.get("energy", 0.0))
+        self.count += 1
+        if self.count > 3 and self.scale > 0 and e > self.factor * self.scale:
+            step = self.stats_of().steps
+            raise BlowUpError(f"energy grew to {e:.3g} from at most {self.scale:.3g} at t={t:.6g} (step {step}); "
+                              f"the run is unstable", t, step)
+        self.scale = max(self.scale, e)
 
 
 def stable_dt_hint(scene: Scene, sim) -> str:
@@ -246,6 +269,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         observers.append(pv)
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
+    if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
+        observers.insert(1, EnergyGuard(writer, scene.output.blowup_factor, lambda: ckpt.stats))
     observers.append(ckpt)
     first = [resume is not None]
 

@@ -34,6 +34,7 @@ class OutputSpec:
     hdf5: bool = True
     checkpoint_every: float = 60.0
     paraview: bool = True
+    blowup_factor: float = 1e3
 
 
 @dataclass(frozen=True)
@@ -122,6 +123,9 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("output.every", "float", None, "simulated time between recorded rows (default t_end/200)", "s", positive),
         Key("output.quantities", "strs", kind.default_quantities, "recorded quantities", choices=kind.quantities),
         Key("output.hdf5", "bool", True, "also stream history and state snapshots to results.h5"),
+        Key("output.blowup_factor", "float", 1e3,
+            "stop when the recorded energy magnitude exceeds this factor times its largest earlier value (0: off)",
+            "", non_negative),
         Key("output.paraview", "bool", True, "beams: write a VTU file per output time and the index beam.pvd"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
     ]
@@ -170,7 +174,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         t_end=v["t_end"],
         integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
         output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"],
-                          v["output.paraview"]),
+                          v["output.paraview"], v["output.blowup_factor"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
     )

@@ -93,3 +93,20 @@ def test_killed_run_keeps_valid_outputs(tmp_path):
     n = len(r["history"]["t"])
     assert n >= 10 and r["snapshots"]["y"].shape == (n, 12)
     np.testing.assert_array_equal(r["history"]["t"][: min(n, len(h["t"]))], h["t"][: min(n, len(h["t"]))])
+
+
+def test_energy_guard_stops_an_exploding_energy(tmp_path):
+    from liegroup_int.integrators import BlowUpError, Stats
+    from liegroup_int.io import HistoryWriter
+    from liegroup_int.runner import EnergyGuard
+
+    energies = iter([0.0, 1e-9, 1e-3, 0.5, 1.0, 0.9, 2.0e3])
+    w = HistoryWriter(tmp_path / "h.csv", {"energy": lambda t, y: next(energies)})
+    guard = EnergyGuard(w, 1e3, lambda: Stats(steps=7))
+    for k in range(6):  # growth from rest (0 -> 1) is not a blow-up; 2000 > 1000 * 1.0 is
+        w(float(k), None)
+        guard(float(k), None)
+    w(6.0, None)
+    with pytest.raises(BlowUpError, match="energy grew to 2e\\+03"):
+        guard(6.0, None)
+    w.close()
