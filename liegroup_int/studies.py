@@ -374,7 +374,7 @@ def _pick_reference(rows: Sequence[Mapping], param: str, reference: str) -> Mapp
 
 
 def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapping = "finest",
-                      quantity: str = "tip") -> list[dict]:
+                      quantity: str = "auto") -> list[dict]:
     """Error of each run's final ``quantity`` against a reference run.
 
     Parameters

@@ -92,7 +92,7 @@ def test_explicit_reference_and_quantities(serial_rows):
     assert default_quantity(rows[0]) == "R+omega_body"
     assert quantity_vector(rows[0], "R+omega_body").shape == (12,)
     with pytest.raises(ValueError, match="tip"):
-        convergence_table(rows, "integrator.dt")  # default quantity "tip": not a rigid-body field
+        convergence_table(rows, "integrator.dt", quantity="tip")  # not a rigid-body field
     with pytest.raises(ValueError, match="t_end"):
         convergence_table(rows, "t_end", quantity="R")  # not a grid key
 

@@ -1,0 +1,43 @@
+"""Every example in examples/ runs as a smoke test (with --quick) and gives its figure."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_every_example_is_covered():
+    assert {p.stem for p in EXAMPLES.glob("*.py")} == {"heavy_top", "pendulum_to_paraview", "screw_motion_se3",
+                                                       "time_convergence"}
+
+
+def test_heavy_top(tmp_path):
+    runs = _load("heavy_top").main(["--quick", "--out", str(tmp_path)])
+    d, _ = runs["rkmk65, tol = 1e-9"]
+    assert abs(d["E"][-1] - d["E"][0]) < 1e-6 * abs(d["E"][0])  # tolerance-limited drift
+    assert (tmp_path / "heavy_top.png").exists()
+
+
+def test_pendulum_to_paraview(tmp_path):
+    res = _load("pendulum_to_paraview").main(["--quick", "--out", str(tmp_path)])
+    assert res.summary["status"] == "ok"
+    assert len(list((tmp_path / "pendulum" / "paraview").glob("*.vtu"))) == 6  # t = 0 and 5 outputs
+
+
+def test_screw_motion_se3():
+    assert _load("screw_motion_se3").main(["--quick"]) < 1e-12  # constant body twist: exact up to round-off
+
+
+def test_time_convergence(tmp_path):
+    rate = _load("time_convergence").main(["--quick", "--out", str(tmp_path)])
+    assert abs(rate - 4.0) < 0.4
