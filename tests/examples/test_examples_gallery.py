@@ -18,7 +18,7 @@ def _load(name):
 
 def test_every_example_is_covered():
     assert {p.stem for p in EXAMPLES.glob("*.py")} == {"heavy_top", "pendulum_to_paraview", "screw_motion_se3",
-                                                       "time_convergence"}
+                                                       "time_convergence", "render_pvd"}
 
 
 def test_heavy_top(tmp_path):
@@ -32,6 +32,8 @@ def test_pendulum_to_paraview(tmp_path):
     res = _load("pendulum_to_paraview").main(["--quick", "--out", str(tmp_path)])
     assert res.summary["status"] == "ok"
     assert len(list((tmp_path / "pendulum" / "paraview").glob("*.vtu"))) == 6  # t = 0 and 5 outputs
+    assert _load("render_pvd").main([str(tmp_path / "pendulum"), str(tmp_path / "pvd.png")]) == 6
+    assert (tmp_path / "pvd.png").stat().st_size > 10000
 
 
 def test_screw_motion_se3():
