@@ -227,9 +227,9 @@ def check(scene: Scene) -> None:
 def diagnostics(pb: BeamProblem, names) -> dict:
     table = {
         "tip": lambda t, y: pb.tip(y),
-        "energy": lambda t, y: pb.energy(y),
-        "kinetic": lambda t, y: pb.energy_parts(y)["kinetic"],
-        "strain": lambda t, y: pb.energy_parts(y)["strain"],
+        "energy": lambda t, y: pb.energy(y, t),
+        "kinetic": lambda t, y: pb.energy_parts(y, t)["kinetic"],
+        "strain": lambda t, y: pb.energy_parts(y, t)["strain"],
         "momentum": lambda t, y: pb.momentum(y)[0],
         "angular_momentum": lambda t, y: pb.momentum(y)[1],
         "orth_error": lambda t, y: pb.orth_error(y),
@@ -268,7 +268,7 @@ def build(scene: Scene) -> Simulation:
     y0 = pb.initial_state()
 
     def final_state(y):
-        return {"tip": pb.tip(y).tolist(), "energy": pb.energy(y), "orth_error": pb.orth_error(y)}
+        return {"tip": pb.tip(y).tolist(), "energy": pb.energy(y, scene.t_end), "orth_error": pb.orth_error(y)}
 
     info = {}
     if scene.integrator.dt == "auto" or scene.integrator.adaptive:

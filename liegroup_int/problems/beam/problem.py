@@ -277,8 +277,9 @@ class BeamProblem(Problem):
         """Centroid at ``s = L`` (last control point of an open knot vector), ``(3,)``."""
         return y.c[-1].copy()
 
-    def energy_parts(self, y: BeamState) -> dict[str, float]:
-        """Kinetic, strain and load-potential energy [J] by collocation quadrature."""
+    def energy_parts(self, y: BeamState, t: float = 0.0) -> dict[str, float]:
+        """Kinetic, strain and load-potential energy [J] at time ``t`` by collocation
+        quadrature (the distributed-load potential uses the load profile at ``t``)."""
         R, K = y.R, y.K
         c_c, v_c, w_c = self.N0 @ y.c, self.N0 @ y.v, self.N0 @ y.w
         _, gam, _ = strains(R, self.N1 @ y.c, self.N2 @ y.c, K, self.gamma0)
@@ -286,7 +287,7 @@ class BeamProblem(Problem):
         Om = rot_T(R, w_c)
         kin = 0.5 * (self.mu * np.sum(v_c**2, axis=1) + np.sum(self.Jm * Om**2, axis=1))
         strain = 0.5 * (np.sum(self.CN * gam**2, axis=1) + np.sum(self.CM * KM**2, axis=1))
-        pot = -(c_c @ self.q) * self.loads.distributed_profile(0.0) if self.has_q else np.zeros(self.n)
+        pot = -(c_c @ self.q) * self.loads.distributed_profile(t) if self.has_q else np.zeros(self.n)
         potential = float(self.quad @ pot)
         for e in self.neumann_ends:
             ld = e.load
@@ -294,10 +295,11 @@ class BeamProblem(Problem):
                 potential -= float(np.dot(ld.force, y.c[e.index]))
         return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
 
-    def energy(self, y: BeamState) -> float:
-        """Total energy: kinetic + strain + distributed-load potential - work of constant
-        end forces (end couples and time-varying loads are not included)."""
-        p = self.energy_parts(y)
+    def energy(self, y: BeamState, t: float = 0.0) -> float:
+        """Total energy at time ``t``: kinetic + strain + distributed-load potential (with
+        its profile at ``t``) - work of constant end forces (end couples and time-varying
+        end loads are not included; with time-varying loads it is not conserved)."""
+        p = self.energy_parts(y, t)
         return p["kinetic"] + p["strain"] + p["potential"]
 
     def momentum(self, y: BeamState) -> tuple[np.ndarray, np.ndarray]:
