@@ -170,7 +170,7 @@ def main(args):
     global CLOCK
     CLOCK = time.perf_counter if args.wall else time.process_time
     sizes = [31, 121] if args.quick else args.sizes
-    print(f"# beam backends: cantilever p=4, RKMK4, fixed dt = 0.3e-6 (31/n)^2, smooth deformed start")
+    print("# beam backends: cantilever p=4, RKMK4, fixed dt = 0.3e-6 (31/n)^2, smooth deformed start")
     print(f"# python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
           f"{platform.machine()}, {os.cpu_count()} cpus, BLAS threads {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}")
     print(f"# load average at start: {os.getloadavg()[0]:.2f} (timings: {'wall' if args.wall else 'process CPU'} "

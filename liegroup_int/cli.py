@@ -54,10 +54,6 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-class _ArgParser(argparse.ArgumentParser):
-    pass
-
-
 def _load(args):
     overrides = dict(parse_override(s) for s in args.overrides)
     return load_scene(args.scene, overrides)
@@ -130,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
             return 0
         if args.command == "run":
-            from .runner import Interrupted, RunError, resume_run, run_scene
+            from .runner import RunError, resume_run, run_scene
 
             try:
                 if args.resume is not None:

@@ -234,8 +234,6 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         st = resume["stats"]
         stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
                       wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"])
-        if dt is None and "h_last" in resume["meta"]:
-            pass
         if scene.t_end <= t0:
             raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
     t_out = output_times(scene.t_end, every)

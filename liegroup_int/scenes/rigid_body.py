@@ -7,7 +7,7 @@ import numpy as np
 from ..groups import SO3
 from ..problems.rigid_body import RigidBody
 from .scene import ProblemKind, Scene, Simulation, register_kind
-from .schema import Key, SceneError, non_negative, positive
+from .schema import Key, SceneError, non_negative
 
 KEYS = {
     k.name: k

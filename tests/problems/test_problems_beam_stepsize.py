@@ -5,7 +5,7 @@ import pytest
 
 from liegroup_int.integrators import IntegrationError, integrate_fixed, resolve_method, stable_step
 from liegroup_int.scenes import load_scene
-from liegroup_int.scenes.beam import KIND, problem
+from liegroup_int.scenes.beam import KIND
 from liegroup_int.tableaux import imaginary_axis_limit
 
 SCENES = ["pendulum", "cantilever", "arch", "spinning_helix", "flying_spaghetti"]

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from liegroup_int import SO3, integrate
-from liegroup_int.integrators import GroupProblem
 from liegroup_int.problems import RigidBody, axisymmetric_free_rotation
 
 R0 = SO3.exp(np.array([0.3, -0.2, 0.5]))

@@ -1,7 +1,6 @@
 """Checkpoints, resume, interruption and killed runs."""
 
 import json
-import os
 import signal
 import subprocess
 import sys
