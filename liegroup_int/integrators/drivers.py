@@ -39,7 +39,7 @@ def _workspace(problem: Problem, tab: ButcherTableau, y0) -> np.ndarray:
     return np.zeros((tab.stages,) + z.shape)
 
 
-def _check_finite(problem: Problem, u: np.ndarray, t: float, step: int) -> None:
+def _check_finite(u: np.ndarray, t: float, step: int) -> None:
     if not np.all(np.isfinite(u)):
         raise BlowUpError(f"non-finite state at t={t:.6g} (step {step}); the step is beyond the stability limit", t, step)
 
@@ -102,7 +102,7 @@ def integrate_fixed(
             h = t_next - t
             y, u = rkmk_step(problem, tab, t, y, h, K)
             stats.rhs_evals += tab.stages
-            _check_finite(problem, u, t_next, stats.steps + 1)
+            _check_finite(u, t_next, stats.steps + 1)
             angle = problem.rotation_angle(u)
             if angle > max_increment_angle:
                 raise StepSizeError(

@@ -23,10 +23,6 @@ from .schema import Key, SceneError, non_negative, positive
 ZERO = (0.0, 0.0, 0.0)
 
 
-def _int_at_least(lo):
-    return lambda v: None if v >= lo else f"an integer >= {lo}"
-
-
 def _int_between(lo, hi):
     return lambda v: None if lo <= v <= hi else f"an integer from {lo} to {hi}"
 
