@@ -10,7 +10,7 @@ cantilever n_ctrl = 31, dt = 1e-6, T = 0.05 s. A ladder of our runs (pendulum n_
 measures our own discretization error; the finest is "ours finest".
 
 Peer: PyElastica ``CosseratRod.straight_rod`` with n_elements = 25 ... 400, section
-constants overwritten to equal ours (see ``_pyelastica_peer.py``), undamped,
+constants overwritten to equal ours (see ``liegroup_int/bench/pyelastica_peer.py``), undamped,
 ``PositionVerlet``. For every resolution the largest stable step ``dt_max`` is found by
 trying steps ``f * dt_est`` (``dt_est = min(dx / sqrt(E/rho), 2 / sqrt(G A / (rho I)))``,
 f = 2, 1.5, 1.2, 1, 0.8, 0.6, 0.5, 0.4, each rounded down to divide the output interval)
@@ -553,7 +553,7 @@ def main(argv=None):
     if args.robustness is None:
         args.robustness = not args.quick
 
-    import _pyelastica_peer as P
+    from liegroup_int.bench import pyelastica_peer as P
 
     print(f"PyElastica {P.VERSION}; numpy {np.__version__}")
     c0 = time.perf_counter()

@@ -49,6 +49,16 @@ def _parser() -> argparse.ArgumentParser:
     pl.add_argument("dir", type=Path, help="output directory of a run")
     pl.add_argument("--times", type=float, nargs="+", default=None, metavar="T",
                     help="times of the deformed shapes (nearest recorded outputs)")
+    be = sub.add_parser("bench", help="work-precision of a beam scene: RKMK methods against PyElastica")
+    be.add_argument("scene", help="pendulum, cantilever (with PyElastica), or any beam scene (ours only)")
+    be.add_argument("--quick", action="store_true", help="short span, coarse ladder (about a minute)")
+    be.add_argument("--t-end", type=float, default=None, metavar="T", help="span of the compared tip history [s]")
+    be.add_argument("--no-peer", action="store_true", help="skip the PyElastica runs")
+    be.add_argument("--backend", default="numba", choices=("numba", "numpy"), help="our stage kernels")
+    be.add_argument("--budget", type=float, default=None, metavar="S",
+                    help="skip our runs predicted to need more CPU seconds than this")
+    be.add_argument("--out", type=Path, default=None, help="output directory (default: bench/SCENE)")
+    be.add_argument("--fresh", action="store_true", help="recompute instead of reusing cached runs")
     sc = sub.add_parser("scenes", help="list the built-in scenes")
     sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
     return p
@@ -96,6 +106,42 @@ def _study(args) -> int:
     return 3 if failed else 0
 
 
+def _bench(args) -> int:
+    from dataclasses import replace
+
+    from . import bench
+
+    if args.t_end is not None and not args.t_end > 0:
+        print(f"error: --t-end must be positive, got {args.t_end}", file=sys.stderr)
+        return 2
+    if args.budget is not None and not args.budget > 0:
+        print(f"error: --budget must be positive, got {args.budget}", file=sys.stderr)
+        return 2
+    try:
+        plan = bench.plan_for(args.scene, quick=args.quick, t_end=args.t_end)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.budget is not None:
+        plan = replace(plan, budget_s=args.budget)
+    out = args.out if args.out is not None else Path("bench") / (Path(args.scene).stem + ("-quick" if args.quick else ""))
+    print(f"work-precision of {args.scene}: T = {plan.t_end:g} s -> {out}")
+    try:
+        result = bench.work_precision(plan, out, backend=args.backend, peer=not args.no_peer, fresh=args.fresh)
+    except KeyboardInterrupt:
+        print(f"error: interrupted; finished runs are kept in {out / 'runs'} and reused by the next call",
+              file=sys.stderr)
+        return 130
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    made = bench.write(result, out)
+    print()
+    print(bench.markdown(result))
+    print("\n".join(str(p) for p in made))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
@@ -111,6 +157,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.command in ("converge", "sweep"):
             return _study(args)
+        if args.command == "bench":
+            return _bench(args)
         if args.command == "plot":
             from .io import plot_run
 

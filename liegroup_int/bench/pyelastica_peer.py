@@ -1,5 +1,6 @@
-"""PyElastica (``pip install pyelastica``, import ``elastica``) set-ups of the built-in
-``pendulum`` and ``cantilever`` scenes, for ``pyelastica_compare.py``.
+"""PyElastica (``pip install -e ".[peers]"``, import ``elastica``) set-ups of the built-in
+``pendulum`` and ``cantilever`` scenes: the peer of ``liegroup-int bench`` and of
+``benchmarks/pyelastica_compare.py``. Importing this module needs PyElastica.
 
 Both rods lie along +x1 from the origin; the tip is the last node. PyElastica's
 ``CosseratRod.straight_rod`` derives everything from a radius (circle): area

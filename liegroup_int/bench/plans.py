@@ -1,0 +1,130 @@
+"""What a work-precision benchmark runs: frozen plans, one per built-in beam scene.
+
+A plan fixes the span, the output grid on which tip histories are compared, the reference
+run (RKMK6 on a finer discretization), our runs and the peer's resolutions. Our runs are of
+two kinds: every method at its stable step on every discretization (their error against the
+fine reference is mostly space error, the fair comparison with a peer), and a time study on
+one discretization (the paper's p = 4, n = 30): every method over fractions of its stable
+step and the adaptive pairs over tolerances, whose *time* error is also measured against an
+RKMK6 run on that same discretization (the paper's Fig. 4(b), 5(b)). ``quick`` plans are the same studies on short spans and coarse
+ladders (a minute, for tests and smoke runs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A work-precision study of one beam scene.
+
+    Attributes
+    ----------
+    scene : str
+        Built-in scene name or TOML path (a beam scene).
+    t_end, every : float
+        Span [s] and output interval [s] of the compared tip history.
+    reference : (int, int)
+        ``(degree, n_ctrl)`` of the RKMK6 reference run.
+    reference_y : float
+        ``|lambda|max * dt`` of the reference run (capped by RKMK6's growth-budget rule).
+    discretizations : tuple of (int, int)
+        ``(degree, n_ctrl)`` of our runs at each method's stable step.
+    time_study : (int, int)
+        ``(degree, n_ctrl)`` of the time study.
+    methods : tuple of str
+        Fixed-step methods.
+    dt_fractions : tuple of float
+        Fractions of each method's stable step in the time study.
+    adaptive : tuple of str
+        Embedded pairs run in the time study with ``rtols`` (``atol = 1e-3 rtol``), step
+        capped by the stable step.
+    rtols : tuple of float
+    peer_elements : tuple of int
+        PyElastica element counts (empty: no peer runs).
+    peer_linear : bool
+        Also run PyElastica's discretization of our continuum model at the finest count.
+    budget_s : float
+        A run whose predicted CPU time exceeds this is skipped (and listed as skipped).
+    """
+
+    scene: str
+    t_end: float
+    every: float
+    reference: tuple[int, int]
+    reference_y: float
+    discretizations: tuple[tuple[int, int], ...]
+    time_study: tuple[int, int] = (4, 31)
+    methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6")
+    dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
+    adaptive: tuple[str, ...] = ("rkmk65",)
+    rtols: tuple[float, ...] = (1e-5, 1e-7, 1e-9)
+    peer_elements: tuple[int, ...] = (50, 100, 200, 400)
+    peer_linear: bool = True
+    budget_s: float = 60.0
+
+    def __post_init__(self):
+        if not (self.t_end > 0 and 0 < self.every <= self.t_end):
+            raise ValueError(f"plan {self.scene}: need 0 < every <= t_end, got every={self.every}, t_end={self.t_end}")
+        if abs(self.t_end / self.every - round(self.t_end / self.every)) > 1e-9:
+            raise ValueError(f"plan {self.scene}: every={self.every} must divide t_end={self.t_end}")
+        if not self.discretizations:
+            raise ValueError(f"plan {self.scene}: no discretizations")
+        if not all(0 < f <= 1 for f in self.dt_fractions):
+            raise ValueError(f"plan {self.scene}: dt_fractions must lie in (0, 1], got {self.dt_fractions}")
+
+
+#: Built-in plans (the issue's scenes: cantilever over 0.05 s, pendulum over 1 s).
+PLANS: dict[str, Plan] = {
+    "cantilever": Plan(
+        scene="cantilever", t_end=0.05, every=2.5e-4, reference=(6, 61), reference_y=0.4,
+        discretizations=((4, 21), (4, 31), (4, 41), (6, 21), (6, 31)),
+    ),
+    "pendulum": Plan(
+        scene="pendulum", t_end=1.0, every=5e-3, reference=(6, 61), reference_y=0.4,
+        discretizations=((4, 21), (4, 31), (4, 61), (6, 21), (6, 31), (6, 41)),
+    ),
+}
+
+#: Short versions: the same comparisons in about a minute.
+QUICK: dict[str, Plan] = {
+    "cantilever": replace(PLANS["cantilever"], t_end=0.002, reference=(6, 31), discretizations=((4, 21), (4, 31)),
+                          time_study=(4, 21), methods=("rkmk3", "rkmk4"), dt_fractions=(1.0, 0.5, 0.25),
+                          rtols=(1e-6, 1e-8),
+                          peer_elements=(50, 100), peer_linear=False, budget_s=20.0),
+    "pendulum": replace(PLANS["pendulum"], t_end=0.1, reference=(6, 41), discretizations=((4, 21), (4, 31)),
+                        time_study=(4, 21), methods=("rkmk3", "rkmk4"), dt_fractions=(1.0, 0.5, 0.25),
+                        rtols=(1e-6, 1e-8),
+                        peer_elements=(50, 100), peer_linear=False, budget_s=20.0),
+}
+
+
+def plan_for(scene: str, quick: bool = False, t_end: float | None = None) -> Plan:
+    """The plan of a built-in scene; any other beam scene gets a generic one.
+
+    Generic plan: the scene's own span and output interval, our runs at the scene's
+    ``(degree, n_ctrl)`` and at about half ``n_ctrl``, the reference at ``2 n_ctrl - 1``,
+    no peer (PyElastica set-ups exist for ``pendulum`` and ``cantilever`` only).
+    """
+    table = QUICK if quick else PLANS
+    if scene in table:
+        plan = table[scene]
+    else:
+        from ..scenes import load_scene
+
+        sc = load_scene(scene)
+        if sc.kind != "beam":
+            raise ValueError(f"bench: {scene!r} is a {sc.kind} scene; the work-precision benchmark is for beam scenes")
+        p, n = int(sc["space.degree"]), int(sc["space.n_ctrl"])
+        span = sc.t_end if not quick else min(sc.t_end, 20 * sc.output.every)
+        half = max(p + 2, (n + 1) // 2)
+        plan = Plan(scene=scene, t_end=span, every=sc.output.every, reference=(p, 2 * n - 1), reference_y=0.4,
+                    discretizations=((p, half), (p, n)), time_study=(p, n), peer_elements=(), peer_linear=False,
+                    methods=("rkmk3", "rkmk4") if quick else Plan.methods,
+                    dt_fractions=(1.0, 0.5, 0.25) if quick else Plan.dt_fractions,
+                    budget_s=20.0 if quick else Plan.budget_s)
+    if t_end is not None:
+        every = plan.every if t_end / plan.every >= 4 else t_end / 4
+        plan = replace(plan, t_end=t_end, every=every)
+    return plan

@@ -1,0 +1,522 @@
+"""Work-precision of beam scenes: tip-history error against CPU time, ours and PyElastica.
+
+For a :class:`~liegroup_int.bench.plans.Plan`:
+
+1. The reference: RKMK6 on ``plan.reference`` at ``|lambda|max dt = plan.reference_y``.
+2. Our runs: every discretization x fixed-step method x fraction of that method's stable
+   step (:func:`~liegroup_int.integrators.stable_step` on the spectral radius at the
+   initial state), and every embedded pair x tolerance (step capped by the stable step).
+3. The peer: PyElastica ``PositionVerlet`` at each element count, at the largest step of a
+   ladder that stays finite over the span (its "own stable dt"); optionally its
+   discretization of our continuum model at the finest count.
+
+The error of a run is ``max_k |x_tip(t_k) - x_tip,ref(t_k)|`` over the output grid
+(metres). CPU time is ``time.process_time`` around the time loop only, after a warm-up
+that compiles the kernels (ours: numba backend; PyElastica: its own numba kernels); tip
+recording costs the same in both. Every finished run is cached in ``out/runs/`` and
+reused by the next call with the same settings, so an interrupted benchmark continues
+where it stopped (``fresh=True`` recomputes).
+
+Ratios against each peer run with error ``e_p`` and CPU ``t_p``: *CPU ratio* =
+``t_p`` over the CPU of our cheapest run with error <= ``e_p``; *accuracy ratio* =
+``e_p`` over the error of our most accurate run with CPU <= ``t_p``. The headline uses
+the peer's finest run (most elements).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..integrators import (IntegrationError, integrate_adaptive, integrate_fixed, resolve_method, spectral_radius,
+                           stable_step)
+from ..scenes import load_scene
+from ..scenes.beam import problem as scene_problem
+from .plans import Plan
+
+#: Fixed-step factors tried for the peer's stable step, largest first (times its estimate).
+PEER_DT_FACTORS = (2.0, 1.5, 1.2, 1.0, 0.8, 0.6, 0.5, 0.4)
+
+
+@dataclass
+class Run:
+    """One timed run and its tip history.
+
+    ``family`` groups runs in tables and plots ("RKMK4", "RKMK65 adaptive",
+    "PyElastica"); ``resolution`` is ``"p4 n31"`` or ``"400 el"``; ``status`` is ``"ok"``,
+    ``"skipped"`` (predicted CPU over budget) or the one-line failure.
+    """
+
+    family: str
+    resolution: str
+    dt: float
+    rtol: float | None = None
+    steps: int = 0
+    rejected: int = 0
+    rhs_evals: int = 0
+    cpu_s: float = math.nan
+    status: str = "ok"
+    error: float = math.nan
+    time_error: float = math.nan
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    tip: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)), repr=False)
+    cached: bool = False
+
+    def row(self) -> dict:
+        d = asdict(self)
+        del d["t"], d["tip"]
+        return d
+
+
+# ----------------------------------------------------------------------------- cache
+def _key(*parts) -> str:
+    return hashlib.sha1(json.dumps(parts, default=str).encode()).hexdigest()[:16]
+
+
+def _load_cached(cache: Path | None, key: str) -> Run | None:
+    if cache is None or not (cache / f"{key}.npz").exists():
+        return None
+    z = np.load(cache / f"{key}.npz", allow_pickle=False)
+    meta = json.loads(str(z["meta"]))
+    return Run(**meta, t=z["t"], tip=z["tip"], cached=True)
+
+
+def _store(cache: Path | None, key: str, run: Run) -> None:
+    if cache is None:
+        return
+    cache.mkdir(parents=True, exist_ok=True)
+    meta = {k: v for k, v in run.row().items() if k not in ("error", "time_error", "cached")}
+    tmp = cache / f"{key}.tmp.npz"
+    np.savez(tmp, meta=json.dumps(meta), t=run.t, tip=run.tip)
+    tmp.replace(cache / f"{key}.npz")
+
+
+# ----------------------------------------------------------------------------- ours
+def _problem(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str):
+    # the scene's own step and output keys are replaced (the benchmark chooses its steps)
+    return scene_problem(load_scene(scene, {"space.degree": degree, "space.n_ctrl": n_ctrl, "t_end": t_end,
+                                            "output.every": every, "integrator.dt": every,
+                                            "integrator.backend": backend}))
+
+
+def fit_step(dt: float, every: float) -> float:
+    """Largest step ``<= dt`` with a whole number of steps per output interval."""
+    return every / math.ceil(every / dt - 1e-9)
+
+
+@dataclass
+class Discretized:
+    """A built problem with its spectral radius and measured cost per stage (CPU s)."""
+
+    problem: object
+    lam_max: float
+    stage_cost_s: float
+
+
+def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str) -> Discretized:
+    """Build, compile (warm-up steps), measure ``|lambda|max`` and the cost of a stage."""
+    pb = _problem(scene, degree, n_ctrl, t_end, every, backend)
+    y0 = pb.initial_state()
+    lam = spectral_radius(pb, 0.0, y0)
+    tab = resolve_method("rkmk4")
+    dt = 0.5 / lam
+    integrate_fixed(pb, tab, (0.0, 2 * dt), y0, dt)  # compile / warm caches
+    n = 20
+    c0 = time.process_time()
+    integrate_fixed(pb, tab, (0.0, n * dt), y0, dt)
+    cost = (time.process_time() - c0) / (n * tab.stages)
+    return Discretized(pb, lam, cost)
+
+
+def _record(pb, rec_t: list, rec_tip: list) -> Callable:
+    def observer(t, y):
+        rec_t.append(float(t))
+        rec_tip.append(pb.tip(y))
+    return observer
+
+
+def run_fixed(d: Discretized, method: str, dt: float, t_end: float, every: float, resolution: str,
+              budget_s: float = math.inf) -> Run:
+    """One fixed-step run of ours at step ``dt`` (a whole number of steps per output)."""
+    tab = resolve_method(method)
+    family = method.upper()
+    steps = int(round(t_end / dt))
+    predicted = steps * tab.stages * d.stage_cost_s
+    if predicted > budget_s:
+        return Run(family, resolution, dt, steps=steps, status=f"skipped (predicted {predicted:.0f} s CPU)")
+    pb = d.problem
+    rec_t, rec_tip = [], []
+    t_out = every * np.arange(1, int(round(t_end / every)) + 1)
+    run = Run(family, resolution, dt)
+    c0 = time.process_time()
+    try:
+        _, _, stats = integrate_fixed(pb, tab, (0.0, t_end), pb.initial_state(), dt,
+                                      observer=_record(pb, rec_t, rec_tip), t_out=t_out)
+        run.steps, run.rhs_evals = stats.steps, stats.rhs_evals
+    except IntegrationError as exc:
+        run.status = f"failed: {exc}"
+    run.cpu_s = time.process_time() - c0
+    run.t, run.tip = np.array(rec_t), np.array(rec_tip).reshape(-1, 3)
+    return run
+
+
+def run_adaptive(d: Discretized, method: str, rtol: float, h_max: float, t_end: float, every: float,
+                 resolution: str) -> Run:
+    """One adaptive run of ours (``atol = 1e-3 rtol``, steps capped at ``h_max``)."""
+    tab = resolve_method(method)
+    pb = d.problem
+    rec_t, rec_tip = [], []
+    t_out = every * np.arange(1, int(round(t_end / every)) + 1)
+    run = Run(f"{method.upper()} adaptive", resolution, h_max, rtol=rtol)
+    c0 = time.process_time()
+    try:
+        _, _, stats = integrate_adaptive(pb, tab, (0.0, t_end), pb.initial_state(), rtol=rtol, atol=1e-3 * rtol,
+                                         observer=_record(pb, rec_t, rec_tip), t_out=t_out, h_max=h_max)
+        run.steps, run.rejected, run.rhs_evals = stats.steps, stats.rejected, stats.rhs_evals
+    except IntegrationError as exc:
+        run.status = f"failed: {exc}"
+    run.cpu_s = time.process_time() - c0
+    run.t, run.tip = np.array(rec_t), np.array(rec_tip).reshape(-1, 3)
+    return run
+
+
+# ----------------------------------------------------------------------------- peer
+def peer_case(scene: str):
+    """PyElastica set-up of a built-in scene, or None when there is none."""
+    from . import pyelastica_peer as P
+
+    make = P.CASES.get(scene)
+    return None if make is None else make()
+
+
+def _peer_ok(r, length: float) -> bool:
+    """Finite, and the tip within 1.5 L of the fixed end at the origin."""
+    return bool(r.finite and np.all(np.linalg.norm(r.tip, axis=1) < 1.5 * length))
+
+
+def run_peer(case, n_elements: int, t_end: float, every: float, model: str = "pyelastica",
+             trial_steps: int = 20000) -> Run:
+    """PyElastica at its largest stable step from :data:`PEER_DT_FACTORS` times the
+    wave/shear estimate. A candidate must first survive ``trial_steps`` steps (whatever
+    the span: an unstable mode of a step just above the limit needs thousands of steps to
+    show), then the span itself; a step that fails moves to the next factor."""
+    from . import pyelastica_peer as P
+
+    w_sr = math.sqrt(case.G * case.A / (case.rho * min(case.I1, case.I2)))
+    est = min(case.length / n_elements / case.wave_speed, 2.0 / w_sr)
+    family = "PyElastica" if model == "pyelastica" else "PyElastica, our continuum model"
+    for f in PEER_DT_FACTORS:
+        dt = fit_step(f * est, every)
+        trial_t = every * math.ceil(trial_steps * dt / every)
+        if trial_t > t_end and not _peer_ok(P.run(case, n_elements, dt, trial_t, every, model), case.length):
+            continue
+        r = P.run(case, n_elements, dt, t_end, every, model)
+        if _peer_ok(r, case.length):
+            return Run(family, f"{n_elements} el", dt, steps=r.steps, rhs_evals=r.steps, cpu_s=r.cpu_s,
+                       t=r.t, tip=r.tip)
+    return Run(family, f"{n_elements} el", math.nan, status="failed: no finite step in the ladder")
+
+
+# ----------------------------------------------------------------------------- errors and ratios
+def tip_error(run: Run, ref: Run) -> float:
+    """``max_k |tip(t_k) - tip_ref(t_k)|`` over the common output grid (nan if incomplete)."""
+    if run.status != "ok" or len(run.t) != len(ref.t) or not np.allclose(run.t, ref.t, atol=1e-9):
+        return math.nan
+    return float(np.max(np.linalg.norm(run.tip - ref.tip, axis=1)))
+
+
+def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
+    """CPU and accuracy ratios of our runs against each finished peer run (module doc)."""
+    mine = [r for r in ours if r.status == "ok" and np.isfinite(r.error)]
+    out = []
+    for p in peers:
+        if p.status != "ok" or not np.isfinite(p.error):
+            continue
+        as_good = [r for r in mine if r.error <= p.error]
+        cheap = min(as_good, key=lambda r: r.cpu_s) if as_good else None
+        within = [r for r in mine if r.cpu_s <= p.cpu_s]
+        best = min(within, key=lambda r: r.error) if within else None
+        out.append({
+            "peer": f"{p.family} {p.resolution}", "peer_error": p.error, "peer_cpu_s": p.cpu_s,
+            "ours_at_error": None if cheap is None else f"{cheap.family} {cheap.resolution} dt={cheap.dt:.3g}"
+            + ("" if cheap.rtol is None else f" rtol={cheap.rtol:g}"),
+            "ours_at_error_cpu_s": None if cheap is None else cheap.cpu_s,
+            "cpu_ratio": None if cheap is None else p.cpu_s / cheap.cpu_s,
+            "ours_at_cpu": None if best is None else f"{best.family} {best.resolution} dt={best.dt:.3g}"
+            + ("" if best.rtol is None else f" rtol={best.rtol:g}"),
+            "ours_at_cpu_error": None if best is None else best.error,
+            "accuracy_ratio": None if best is None else p.error / best.error,
+        })
+    return out
+
+
+# ----------------------------------------------------------------------------- the study
+@dataclass
+class Result:
+    plan: Plan
+    reference: Run
+    reference_check: Run | None
+    time_reference: Run
+    ours: list[Run]
+    peers: list[Run]
+    ratios: list[dict]
+    lam_max: dict[str, float]
+    peer_version: str | None = None
+    peer_note: str | None = None
+
+
+def _say(log: Callable | None, msg: str) -> None:
+    if log is not None:
+        log(msg)
+
+
+def _describe(r: Run) -> str:
+    extra = f" rtol={r.rtol:g}" if r.rtol is not None else ""
+    head = f"{r.family:>22s} {r.resolution:>8s} dt={r.dt:.3g}{extra}"
+    if r.status != "ok":
+        return f"{head}: {r.status}"
+    err = f" err={r.error:.3e}" if np.isfinite(r.error) else ""
+    return f"{head}: {r.steps} steps, {r.cpu_s:.2f} s CPU{err}{' (cached)' if r.cached else ''}"
+
+
+def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", peer: bool = True,
+                   fresh: bool = False, log: Callable | None = print) -> Result:
+    """Run a plan (module doc). ``out/runs`` caches finished runs unless ``out`` is None."""
+    cache = None if out is None else Path(out) / "runs"
+    if fresh and cache is not None and cache.exists():
+        for f in cache.glob("*.npz"):
+            f.unlink()
+    built: dict[tuple[int, int], Discretized] = {}
+
+    def disc(p: int, n: int) -> Discretized:
+        if (p, n) not in built:
+            built[(p, n)] = prepare(plan.scene, p, n, plan.t_end, plan.every, backend)
+            _say(log, f"  p={p} n_ctrl={n}: |lambda|max = {built[(p, n)].lam_max:.4g} 1/s, "
+                      f"{1e6 * built[(p, n)].stage_cost_s:.1f} us CPU per stage")
+        return built[(p, n)]
+
+    def cached(key_parts, make: Callable[[], Run]) -> Run:
+        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts)
+        hit = _load_cached(cache, key)
+        if hit is not None:
+            return hit
+        run = make()
+        if not run.status.startswith("skipped"):
+            _store(cache, key, run)
+        return run
+
+    # 1. reference (and a check of its time error at twice the step)
+    p_ref, n_ref = plan.reference
+    res_ref = f"p{p_ref} n{n_ref}"
+    _say(log, f"reference: RKMK6, {res_ref}")
+    d_ref = disc(p_ref, n_ref)
+    y_ref = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_ref.lam_max, plan.t_end).y)
+    dt_ref = fit_step(y_ref / d_ref.lam_max, plan.every)
+    ref = cached(("ref", p_ref, n_ref, dt_ref), lambda: run_fixed(d_ref, "rkmk6", dt_ref, plan.t_end, plan.every, res_ref))
+    if ref.status != "ok":
+        raise RuntimeError(f"bench {plan.scene}: the reference run failed: {ref.status}")
+    _say(log, _describe(ref))
+    dt_chk = fit_step(2 * dt_ref, plan.every)
+    check = None
+    if dt_chk > dt_ref:
+        check = cached(("ref", p_ref, n_ref, dt_chk),
+                       lambda: run_fixed(d_ref, "rkmk6", dt_chk, plan.t_end, plan.every, res_ref))
+        check.error = tip_error(check, ref)
+        _say(log, "  time-error check of the reference (2 dt): " + _describe(check))
+
+    # 2. ours: every method at its stable step on every discretization, and the time study
+    p_t, n_t = plan.time_study
+    res_t = f"p{p_t} n{n_t}"
+    d_t = disc(p_t, n_t)
+    y_t = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_t.lam_max, plan.t_end).y)
+    dt_t = fit_step(y_t / d_t.lam_max, plan.every)
+    tref = cached(("ref", p_t, n_t, dt_t), lambda: run_fixed(d_t, "rkmk6", dt_t, plan.t_end, plan.every, res_t))
+    if tref.status != "ok":
+        raise RuntimeError(f"bench {plan.scene}: the time-study reference ({res_t}) failed: {tref.status}")
+    tref.error = tip_error(tref, ref)
+    _say(log, "time-study reference: " + _describe(tref))
+    ours: dict[str, Run] = {}
+
+    def add(key_parts, make: Callable[[], Run], timed: bool) -> None:
+        k = _key(*key_parts)
+        if k in ours:
+            return
+        r = cached(key_parts, make)
+        r.error = tip_error(r, ref)
+        if timed:
+            r.time_error = tip_error(r, tref)
+        ours[k] = r
+        _say(log, _describe(r))
+
+    ladder = [((p, n), (1.0,)) for p, n in plan.discretizations if (p, n) != (p_t, n_t)]
+    ladder.append(((p_t, n_t), tuple(plan.dt_fractions)))
+    for (p, n), fractions in ladder:
+        d, res, timed = disc(p, n), f"p{p} n{n}", (p, n) == (p_t, n_t)
+        for m in plan.methods:
+            dt_stable = stable_step(resolve_method(m), d.lam_max, plan.t_end).dt
+            for f in fractions:
+                dt = fit_step(f * dt_stable, plan.every)
+                add((m, p, n, dt), lambda: run_fixed(d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
+    for m in plan.adaptive:
+        h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
+        for rtol in plan.rtols:
+            add((m, "adaptive", p_t, n_t, rtol, h_max),
+                lambda: run_adaptive(d_t, m, rtol, h_max, plan.t_end, plan.every, res_t), True)
+
+    # 3. peer
+    peers: list[Run] = []
+    version = note = None
+    if peer and plan.peer_elements:
+        try:
+            from . import pyelastica_peer as P
+        except ImportError as exc:
+            note = f"PyElastica not available ({exc}); install the peers extra: pip install -e \".[peers]\""
+            _say(log, note)
+        else:
+            version = P.VERSION
+            case = peer_case(Path(plan.scene).stem)
+            if case is None:
+                note = f"no PyElastica set-up for scene {plan.scene!r} (pendulum and cantilever only)"
+                _say(log, note)
+            else:
+                P.warm_up()
+                counts = list(plan.peer_elements)
+                models = [("pyelastica", n) for n in counts]
+                if plan.peer_linear:
+                    models.append(("linear", counts[-1]))
+                for model, n in models:
+                    r = cached(("peer", model, n), lambda: run_peer(case, n, plan.t_end, plan.every, model))
+                    r.error = tip_error(r, ref)
+                    peers.append(r)
+                    _say(log, _describe(r))
+    lam = {f"p{p} n{n}": d.lam_max for (p, n), d in built.items()}
+    headline = [r for r in peers if r.family == "PyElastica"]
+    mine = list(ours.values())
+    return Result(plan, ref, check, tref, mine, peers, ratios(mine, headline), lam, version, note)
+
+
+# ----------------------------------------------------------------------------- reporting
+def _fmt(x, spec: str) -> str:
+    return "-" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
+
+
+def markdown(result: Result) -> str:
+    """Tables of all runs and of the ratios, as Markdown."""
+    pl = result.plan
+    lines = [f"### {pl.scene}: T = {pl.t_end:g} s, tip history every {pl.every:g} s", ""]
+    ref = result.reference
+    lines.append(f"Reference: RKMK6, {ref.resolution}, dt = {ref.dt:.3g} s ({ref.steps} steps, "
+                 f"{ref.cpu_s:.1f} s CPU); max |tip_ref| = {np.max(np.linalg.norm(ref.tip, axis=1)):.4g} m.")
+    if result.reference_check is not None:
+        lines.append(f"Its time error (RKMK6 at 2 dt against it): {_fmt(result.reference_check.error, '.2e')} m.")
+    tr = result.time_reference
+    lines.append(f"Time study on {tr.resolution}: time errors against RKMK6 on that discretization at dt = {tr.dt:.3g} s "
+                 f"(which is {_fmt(tr.error, '.2e')} m from the reference: the space error of {tr.resolution}).")
+    lines.append("Spectral radius at the initial state: "
+                 + ", ".join(f"{k}: {v:.3g} 1/s" for k, v in result.lam_max.items()) + ".")
+    lines += ["", "| run | resolution | dt [s] | rtol | steps | rejected | CPU [s] | max tip error [m] | "
+              "time error [m] | status |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in result.ours + result.peers:
+        lines.append(f"| {r.family} | {r.resolution} | {_fmt(r.dt, '.3g')} | {_fmt(r.rtol, 'g')} | {r.steps} | "
+                     f"{r.rejected if r.rtol is not None else '-'} | {_fmt(r.cpu_s, '.3g')} | {_fmt(r.error, '.3e')} | "
+                     f"{_fmt(r.time_error, '.3e')} | {r.status} |")
+    if result.peer_note:
+        lines += ["", f"Peer: {result.peer_note}."]
+    if result.ratios:
+        lines += ["", f"Ratios against PyElastica {result.peer_version} (CPU ratio: peer CPU / CPU of our cheapest run "
+                  "at least as accurate; accuracy ratio: peer error / error of our best run within the peer's CPU):",
+                  "", "| peer run | peer error [m] | peer CPU [s] | ours at that error | CPU [s] | CPU ratio | "
+                  "ours within that CPU | error [m] | accuracy ratio |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for q in result.ratios:
+            lines.append(f"| {q['peer']} | {q['peer_error']:.3e} | {q['peer_cpu_s']:.3g} | {q['ours_at_error'] or '-'} | "
+                         f"{_fmt(q['ours_at_error_cpu_s'], '.3g')} | {_fmt(q['cpu_ratio'], '.1f')} | "
+                         f"{q['ours_at_cpu'] or '-'} | {_fmt(q['ours_at_cpu_error'], '.3e')} | "
+                         f"{_fmt(q['accuracy_ratio'], '.1f')} |")
+    return "\n".join(lines) + "\n"
+
+
+def plot(result: Result, path: Path) -> Path:
+    """Two log-log panels. Left: error against the fine reference over CPU time, one colour
+    per method, one marker per resolution, PyElastica in black. Right: the time study,
+    time error against CPU time per method (the paper's Fig. 4(b), 5(b))."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.2))
+    ok = [r for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
+    families = sorted({r.family for r in result.ours})
+    colors = {f: plt.cm.viridis(i / max(1, len(families) - 1)) for i, f in enumerate(families)}
+    markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*h"))
+    groups: dict[tuple[str, str], list[Run]] = {}
+    for r in ok:
+        groups.setdefault((r.family, r.resolution), []).append(r)
+    labelled = set()
+    for (fam, res), runs in sorted(groups.items()):
+        runs = sorted(runs, key=lambda r: r.cpu_s)
+        ax.loglog([r.cpu_s for r in runs], [r.error for r in runs], marker=markers[res], color=colors[fam], lw=1,
+                  ls="-" if len(runs) > 1 else "none", label=fam if fam not in labelled else None)
+        labelled.add(fam)
+    for res, mk in markers.items():
+        ax.plot([], [], marker=mk, color="0.5", ls="none", label=res)
+    for fam, style in (("PyElastica", "k-"), ("PyElastica, our continuum model", "k--")):
+        pr = sorted((r for r in result.peers if r.family == fam and r.status == "ok" and np.isfinite(r.error)),
+                    key=lambda r: r.cpu_s)
+        if pr:
+            ax.loglog([r.cpu_s for r in pr], [r.error for r in pr], style, marker="x", ms=8,
+                      label=f"{fam} ({', '.join(r.resolution for r in pr)})")
+    ax.set_xlabel("CPU time [s]")
+    ax.set_ylabel("max tip error against the fine RKMK6 reference [m]")
+    ax.set_title(f"{result.plan.scene}, T = {result.plan.t_end:g} s: space + time error "
+                 f"(reference {result.reference.resolution})", fontsize=9)
+    ax.legend(fontsize=7, ncol=2)
+    tr = result.time_reference
+    for fam in families:
+        runs = sorted((r for r in ok if r.family == fam and np.isfinite(r.time_error) and r.time_error > 0),
+                      key=lambda r: r.cpu_s)
+        if runs:
+            bx.loglog([r.cpu_s for r in runs], [r.time_error for r in runs], marker="o", color=colors[fam], label=fam)
+    bx.set_xlabel("CPU time [s]")
+    bx.set_ylabel(f"max tip error against RKMK6 on {tr.resolution} [m]")
+    bx.set_title(f"time error on {tr.resolution} (paper Fig. 4(b)/5(b))", fontsize=9)
+    bx.legend(fontsize=7)
+    for a in (ax, bx):
+        a.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def write(result: Result, out: Path) -> list[Path]:
+    """``work_precision.md``, ``work_precision.json`` (all runs, ratios) and the PNG."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / "work_precision.md"
+    md.write_text(markdown(result))
+    js = out / "work_precision.json"
+    payload = {"plan": asdict(result.plan), "reference": result.reference.row(),
+               "reference_check": None if result.reference_check is None else result.reference_check.row(),
+               "time_reference": result.time_reference.row(),
+               "lambda_max": result.lam_max, "ours": [r.row() for r in result.ours],
+               "peers": [r.row() for r in result.peers], "ratios": result.ratios,
+               "peer_version": result.peer_version, "peer_note": result.peer_note}
+    tmp = js.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(payload, indent=1, default=float))
+    tmp.replace(js)
+    return [md, js, plot(result, out / "work_precision.png")]
+
+
+__all__ = ["Run", "Result", "Discretized", "prepare", "run_fixed", "run_adaptive", "run_peer", "tip_error",
+           "ratios", "work_precision", "markdown", "plot", "write", "fit_step"]
