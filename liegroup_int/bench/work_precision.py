@@ -29,14 +29,21 @@ import hashlib
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from functools import partial
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
-from ..integrators import (IntegrationError, integrate_adaptive, integrate_fixed, resolve_method, spectral_radius,
-                           stable_step)
+from ..integrators import (
+    IntegrationError,
+    integrate_adaptive,
+    integrate_fixed,
+    resolve_method,
+    spectral_radius,
+    stable_step,
+)
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
 from .plans import Plan
@@ -363,12 +370,12 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
             dt_stable = stable_step(resolve_method(m), d.lam_max, plan.t_end).dt
             for f in fractions:
                 dt = fit_step(f * dt_stable, plan.every)
-                add((m, p, n, dt), lambda: run_fixed(d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
+                add((m, p, n, dt), partial(run_fixed, d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
     for m in plan.adaptive:
         h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
         for rtol in plan.rtols:
             add((m, "adaptive", p_t, n_t, rtol, h_max),
-                lambda: run_adaptive(d_t, m, rtol, h_max, plan.t_end, plan.every, res_t), True)
+                partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t), True)
 
     # 3. peer
     peers: list[Run] = []
@@ -392,7 +399,7 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
                 if plan.peer_linear:
                     models.append(("linear", counts[-1]))
                 for model, n in models:
-                    r = cached(("peer", model, n), lambda: run_peer(case, n, plan.t_end, plan.every, model))
+                    r = cached(("peer", model, n), partial(run_peer, case, n, plan.t_end, plan.every, model))
                     r.error = tip_error(r, ref)
                     peers.append(r)
                     _say(log, _describe(r))
@@ -518,5 +525,19 @@ def write(result: Result, out: Path) -> list[Path]:
     return [md, js, plot(result, out / "work_precision.png")]
 
 
-__all__ = ["Run", "Result", "Discretized", "prepare", "run_fixed", "run_adaptive", "run_peer", "tip_error",
-           "ratios", "work_precision", "markdown", "plot", "write", "fit_step"]
+__all__ = [
+    "Discretized",
+    "Result",
+    "Run",
+    "fit_step",
+    "markdown",
+    "plot",
+    "prepare",
+    "ratios",
+    "run_adaptive",
+    "run_fixed",
+    "run_peer",
+    "tip_error",
+    "work_precision",
+    "write",
+]

@@ -7,7 +7,15 @@ import sys
 import numpy as np
 import pytest
 
-from liegroup_int.bench import Plan, Run, plan_for, ratios, tip_error, work_precision, write
+from liegroup_int.bench import (
+    Plan,
+    Run,
+    plan_for,
+    ratios,
+    tip_error,
+    work_precision,
+    write,
+)
 from liegroup_int.cli import main
 
 # Pendulum over 20 ms: the smallest plan that still has a space ladder (n_ctrl 11, 21),
