@@ -62,6 +62,9 @@ KEYS = {
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
         Key("material.G", "float", None, "shear modulus (overrides nu)", "Pa", positive),
         Key("material.rho", "float", None, "density", "kg/m^3", positive),
+        Key("material.kelvin_voigt", "float", 0.0,
+            "Kelvin-Voigt retardation time tau (strain-rate damping, ratio tau omega / 2; 0 = none)", "s",
+            non_negative),
         Key("section.shape", "str", "circle", "cross-section", choices=("circle", "square", "rectangle", "explicit")),
         Key("section.d", "float", None, "diameter (circle)", "m", positive),
         Key("section.t", "float", None, "side (square)", "m", positive),
@@ -207,7 +210,8 @@ def problem(scene: Scene) -> BeamProblem:
     bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"])
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     try:
-        return BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"])
+        return BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"],
+                           kelvin_voigt=scene["material.kelvin_voigt"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
 
@@ -274,7 +278,8 @@ def build(scene: Scene) -> Simulation:
     info = {
         **info,
         "discretization": {"degree": scene["space.degree"], "n_ctrl": scene["space.n_ctrl"],
-                           "length": pb.space.length, "C_star": 4.0},
+                           "length": pb.space.length, "C_star": 4.0,
+                           "kelvin_voigt": pb.tau},
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
     }
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),

@@ -7,11 +7,12 @@ one loop over the collocation points per call:
   control values (banded ``N0, N1, N2``), ``R <- exp(hat(theta)) R``, the curvature update
   (eqs. 52-53 of method.md section 1: ``K' = K + R^T J_r theta_s`` and its s-derivative,
   with ``B1 = B'/t`` and ``C1 = C'/t``), ``c, v, w`` plus their increments.
-* :func:`rates_kernel`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains,
-  resultants, balance residuals, enhanced-collocation terms at Neumann ends, ``dexpinv``,
-  Dirichlet rows set to zero, all into a row-contiguous ``(n, 12)`` right-hand side whose
-  forward (``L``) sweep runs in the same loop; then the backward (``U``) sweep writes the
-  ``(4, n, 3)`` rate.
+* :func:`rates_kernel`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains
+  (plus ``tau`` times their rates with Kelvin-Voigt damping), resultants, balance
+  residuals, enhanced-collocation terms at Neumann ends, ``dexpinv``, Dirichlet rows set
+  to zero, all into a row-contiguous ``(n, 12)`` right-hand side whose forward (``L``)
+  sweep runs in the same loop; then the backward (``U``) sweep writes the ``(4, n, 3)``
+  rate.
 * :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
 
 SO(3) coefficients use the branch logic of :mod:`liegroup_int.groups.so3_coefficients`:
@@ -77,9 +78,9 @@ _HEADER = 16
 # (everything that may change outside this file - series length and coefficients, the
 # threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
-# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold
-_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR = 0, 3, 6, 9, 10, 13, 16, 17, 18
-_N_PRM = 19
+# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold tau (Kelvin-Voigt)
+_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU = 0, 3, 6, 9, 10, 13, 16, 17, 18, 19
+_N_PRM = 20
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
 _NEI, _NEF = 5, 8
@@ -240,6 +241,7 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W = c.shape[0], band.shape[2]
     thr = prm[_P_THR]
+    tau = prm[_P_TAU]
     for i in range(n):
         for d in range(3):
             c2[i, d] = c[i, d] + u[0, i, d]
@@ -344,6 +346,7 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
     mx, my, mz = prm[_P_M], prm[_P_M + 1], prm[_P_M + 2]
     has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
     thr = prm[_P_THR]
+    tau = prm[_P_TAU]
     for i in range(n):
         cs0 = cs1 = cs2 = css0 = css1 = css2 = 0.0
         vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
@@ -382,6 +385,50 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
         gs2 = (r02 * css0 + r12 * css1 + r22 * css2) - kr2
         km0, km1, km2 = k0 - geo[i, 3], k1 - geo[i, 4], k2 - geo[i, 5]
         kms0, kms1, kms2 = Ks[i, 0] - geo[i, 6], Ks[i, 1] - geo[i, 7], Ks[i, 2] - geo[i, 8]
+        if tau != 0.0:  # Kelvin-Voigt (problem._add_strain_rates): strains + tau * rates
+            vs0 = vs1 = vs2 = vss0 = vss1 = vss2 = 0.0
+            ws0 = ws1 = ws2 = wss0 = wss1 = wss2 = 0.0
+            for k in range(W):
+                j = js + k
+                b1, b2 = band[1, i, k], band[2, i, k]
+                vs0 += b1 * v[j, 0]
+                vs1 += b1 * v[j, 1]
+                vs2 += b1 * v[j, 2]
+                vss0 += b2 * v[j, 0]
+                vss1 += b2 * v[j, 1]
+                vss2 += b2 * v[j, 2]
+                ws0 += b1 * w[j, 0]
+                ws1 += b1 * w[j, 1]
+                ws2 += b1 * w[j, 2]
+                wss0 += b2 * w[j, 0]
+                wss1 += b2 * w[j, 1]
+                wss2 += b2 * w[j, 2]
+            # dGamma/dt = R^T (v_s - w x c_s)
+            h0, h1, h2 = _cross(wc0, wc1, wc2, cs0, cs1, cs2)
+            h0, h1, h2 = vs0 - h0, vs1 - h1, vs2 - h2
+            gd0 = r00 * h0 + r10 * h1 + r20 * h2
+            gd1 = r01 * h0 + r11 * h1 + r21 * h2
+            gd2 = r02 * h0 + r12 * h1 + r22 * h2
+            # d/ds dGamma/dt = R^T (v_ss - w_s x c_s - w x c_ss) - K x dGamma/dt
+            h0, h1, h2 = _cross(ws0, ws1, ws2, cs0, cs1, cs2)
+            g0, g1, g2 = _cross(wc0, wc1, wc2, css0, css1, css2)
+            h0, h1, h2 = vss0 - h0 - g0, vss1 - h1 - g1, vss2 - h2 - g2
+            g0, g1, g2 = _cross(k0, k1, k2, gd0, gd1, gd2)
+            gds0 = r00 * h0 + r10 * h1 + r20 * h2 - g0
+            gds1 = r01 * h0 + r11 * h1 + r21 * h2 - g1
+            gds2 = r02 * h0 + r12 * h1 + r22 * h2 - g2
+            # dK/dt = R^T w_s, d/ds dK/dt = R^T w_ss - K x dK/dt
+            kd0 = r00 * ws0 + r10 * ws1 + r20 * ws2
+            kd1 = r01 * ws0 + r11 * ws1 + r21 * ws2
+            kd2 = r02 * ws0 + r12 * ws1 + r22 * ws2
+            g0, g1, g2 = _cross(k0, k1, k2, kd0, kd1, kd2)
+            kds0 = r00 * wss0 + r10 * wss1 + r20 * wss2 - g0
+            kds1 = r01 * wss0 + r11 * wss1 + r21 * wss2 - g1
+            kds2 = r02 * wss0 + r12 * wss1 + r22 * wss2 - g2
+            ga0, ga1, ga2 = ga0 + tau * gd0, ga1 + tau * gd1, ga2 + tau * gd2
+            gs0, gs1, gs2 = gs0 + tau * gds0, gs1 + tau * gds1, gs2 + tau * gds2
+            km0, km1, km2 = km0 + tau * kd0, km1 + tau * kd1, km2 + tau * kd2
+            kms0, kms1, kms2 = kms0 + tau * kds0, kms1 + tau * kds1, kms2 + tau * kds2
         # resultants (material frame)
         N0_, N1_, N2_ = CN0 * ga0, CN1 * ga1, CN2 * ga2
         M0_, M1_, M2_ = CM0 * km0, CM1 * km1, CM2 * km2
@@ -588,6 +635,7 @@ class NumbaBeamKernels:
         prm[_P_HASQ] = float(pb.has_q)
         prm[_P_HASM] = float(pb.has_m)
         prm[_P_THR] = float(TAYLOR_THRESHOLD)
+        prm[_P_TAU] = float(pb.tau)
         ser = np.array([[float(x) for x in TAYLOR[k]] for k in _SERIES_KEYS])
         if pb.curved:
             geo = np.concatenate([pb.gamma0, pb.K0, pb.K0_s], axis=1)
