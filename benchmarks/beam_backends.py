@@ -4,7 +4,16 @@ Scene: the built-in ``cantilever`` (p = 4), ``n_ctrl`` in 31, 61, 121, 251, 501,
 integrated with fixed-step RKMK4 through the public driver
 (:func:`liegroup_int.integrators.integrate_fixed`, i.e. what a user gets: 4 actions,
 4 stage rates, 4 increment combinations, one rotation-angle check and one finiteness
-check per step).
+check per step). Three paths:
+
+* ``numpy``: ``backend="numpy"``, the generic driver loop;
+* ``numba generic``: ``backend="numba"`` through the generic driver loop (one compiled
+  call per action, stage rate and angle check; combinations and checks in NumPy). The
+  driver takes this path whenever a per-step ``monitor`` is given, so it is timed with
+  a no-op monitor (one Python call per step, ~0.1 us);
+* ``numba fused``: ``backend="numba"`` without a monitor: the driver hands all steps
+  between output times to the problem's compiled stepper
+  (``BeamProblem.compiled_stepper``, one compiled call for the whole batch here).
 
 Start state. Not the state at rest: with the tiny steps these sizes need, the far field of
 a from-rest run underflows to subnormal numbers during the first hundreds of steps and
@@ -24,8 +33,9 @@ is imported, for both backends alike. "driver only" times the same driver on a n
 problem with the beam's increment shape (action returns its input, rates return zeros):
 the floor no problem backend can go below.
 
-Columns: per-step time of each backend, speed-up ``t_numpy / t_numba``, numba cost per
-stage per collocation point in ns, the driver-only time. Fitted exponents: least squares
+Columns: per-step time of each path, speed-ups ``t_numpy / t_fused`` and
+``t_numpy / t_generic``, fused cost per stage per collocation point in ns, the
+driver-only time of the generic loop. Fitted exponents: least squares
 of ``log t_step`` against ``log n_ctrl`` over all sizes.
 
 Usage (from the repository root)::
@@ -91,6 +101,9 @@ class NullProblem:
     def action(self, u, y):
         return y
 
+    def end_step(self, y):
+        return y
+
     def increment_rate(self, t, y, u):
         return np.zeros((4, self.n, 3))
 
@@ -102,7 +115,9 @@ class NullProblem:
 
 
 def problems(n):
-    pb = scene_problem(load_scene("cantilever", {"space.n_ctrl": n, "space.degree": 4}))
+    # the scene default is backend="numba": ask for NumPy explicitly
+    pb = scene_problem(load_scene("cantilever", {"space.n_ctrl": n, "space.degree": 4,
+                                                 "integrator.backend": "numpy"}))
     nb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numba")
     return pb, nb
 
@@ -118,19 +133,29 @@ def start_state(pb):
     return pb.action(u, pb.initial_state())
 
 
-def time_steps(prob, y, dt, batch_s, repeats):
+def no_monitor(t, y, stats):
+    """A per-step monitor that does nothing: keeps the driver on its generic loop."""
+
+
+def time_steps(prob, y, dt, batch_s, repeats, monitor=None):
     """Best per-step seconds over ``repeats`` batches of ``N`` steps, and the end state."""
-    integrate_fixed(prob, TAB, (0.0, 2 * dt), y, dt)  # warm-up (JIT, caches)
+    integrate_fixed(prob, TAB, (0.0, 2 * dt), y, dt, monitor=monitor)  # warm-up (JIT, caches)
     t0 = CLOCK()
-    integrate_fixed(prob, TAB, (0.0, 10 * dt), y, dt)
+    integrate_fixed(prob, TAB, (0.0, 10 * dt), y, dt, monitor=monitor)
     est = max((CLOCK() - t0) / 10, 1e-7)
     N = max(3, int(np.ceil(batch_s / est)))
     best, y_end = np.inf, None
     for _ in range(repeats):
         t0 = CLOCK()
-        _, y_end, _ = integrate_fixed(prob, TAB, (0.0, N * dt), y, dt)
+        _, y_end, _ = integrate_fixed(prob, TAB, (0.0, N * dt), y, dt, monitor=monitor)
         best = min(best, (CLOCK() - t0) / N)
     return best, N, y_end
+
+
+def rel_diff(a, b, y0):
+    """``max |a.c - b.c|`` relative to the largest displacement ``max |b.c - y0.c|``."""
+    scale = np.max(np.abs(b.c - y0.c))
+    return float(np.max(np.abs(a.c - b.c)) / scale) if scale > 0 else 0.0
 
 
 def time_calls(nb, y, dt, batch_s, repeats):
@@ -180,38 +205,43 @@ def main(args):
         pb, nb = problems(n)
         y = start_state(pb)
         dt = 0.3e-6 * (31.0 / n) ** 2
+        assert nb.compiled_stepper(TAB) is not None and pb.compiled_stepper(TAB) is None
         t_np, N_np, y_np = time_steps(pb, y, dt, args.batch, args.repeats)
-        t_nb, N_nb, y_nb = time_steps(nb, y, dt, args.batch, args.repeats)
+        t_nb, N_nb, y_nb = time_steps(nb, y, dt, args.batch, args.repeats, monitor=no_monitor)
+        t_fu, N_fu, y_fu = time_steps(nb, y, dt, args.batch, args.repeats)
         t_dr, _, _ = time_steps(NullProblem(n), None, dt, args.batch, args.repeats)
         calls = time_calls(nb, y, dt, args.batch, args.repeats)
-        row = dict(n=n, numpy=t_np, numba=t_nb, driver=t_dr, N_np=N_np, N_nb=N_nb, calls=calls,
-                   solver=nb._nb.solver, finite=bool(pb.is_finite(y_np) and nb.is_finite(y_nb)),
-                   subnormal=subnormals(y_np) + subnormals(y_nb))
-        # same trajectory? (tip after the numba batch vs a NumPy run of the same length)
-        if N_nb != N_np:
-            _, y_np, _ = integrate_fixed(pb, TAB, (0.0, N_nb * dt), y, dt)
-        tip_scale = np.max(np.abs(y_np.c - y.c))
-        row["tip_diff"] = float(np.max(np.abs(y_np.c - y_nb.c)) / tip_scale) if tip_scale > 0 else 0.0
+        row = dict(n=n, numpy=t_np, numba=t_nb, fused=t_fu, driver=t_dr, N_np=N_np, N_nb=N_nb, N_fu=N_fu,
+                   calls=calls, solver=nb._nb.solver,
+                   finite=bool(pb.is_finite(y_np) and nb.is_finite(y_nb) and nb.is_finite(y_fu)),
+                   subnormal=subnormals(y_np) + subnormals(y_nb) + subnormals(y_fu))
+        # same trajectory? (c after the fused batch vs generic numba and NumPy runs of the same length)
+        _, y_np, _ = integrate_fixed(pb, TAB, (0.0, N_fu * dt), y, dt)
+        _, y_nb, _ = integrate_fixed(nb, TAB, (0.0, N_fu * dt), y, dt, monitor=no_monitor)
+        row["tip_diff"] = rel_diff(y_np, y_nb, y)
+        row["fused_diff"] = rel_diff(y_fu, y_nb, y)
         if args.what_if_combine:
             row["numba_mm"] = time_with_matmul_combine(nb, y, dt, args)
         rows.append(row)
-        print(f"#   n={n}: done (numpy {N_np} steps/batch, numba {N_nb})", flush=True)
+        print(f"#   n={n}: done (steps/batch: numpy {N_np}, numba generic {N_nb}, fused {N_fu})", flush=True)
 
-    head = (f"{'n_ctrl':>6} | {'numpy us/step':>13} | {'numba us/step':>13} | {'speed-up':>8} | "
-            f"{'numba ns/stage/pt':>17} | {'driver-only us/step':>19}")
+    head = (f"{'n_ctrl':>6} | {'numpy us/step':>13} | {'numba generic us/step':>21} | "
+            f"{'numba fused us/step':>19} | {'speed-up numpy/fused':>20} | {'numpy/generic':>13} | "
+            f"{'fused ns/stage/pt':>17} | {'driver-only us/step':>19}")
     if args.what_if_combine:
         head += f" | {'numba, matmul combine':>21} | {'speed-up':>8}"
     print()
     print(head)
     print("-" * len(head))
     for r in rows:
-        line = (f"{r['n']:>6} | {r['numpy'] * 1e6:>13.1f} | {r['numba'] * 1e6:>13.1f} | "
-                f"{r['numpy'] / r['numba']:>7.1f}x | {r['numba'] / (STAGES * r['n']) * 1e9:>17.0f} | "
+        line = (f"{r['n']:>6} | {r['numpy'] * 1e6:>13.1f} | {r['numba'] * 1e6:>21.1f} | "
+                f"{r['fused'] * 1e6:>19.1f} | {r['numpy'] / r['fused']:>19.1f}x | "
+                f"{r['numpy'] / r['numba']:>12.1f}x | {r['fused'] / (STAGES * r['n']) * 1e9:>17.0f} | "
                 f"{r['driver'] * 1e6:>19.1f}")
         if args.what_if_combine:
             line += f" | {r['numba_mm'] * 1e6:>21.1f} | {r['numpy'] / r['numba_mm']:>7.1f}x"
         print(line)
-    print(f"\nwhere the numba step goes (us; per call, then per step = {STAGES} actions + {STAGES} rates + 1 angle):")
+    print(f"\nwhere the generic numba step goes (us; per call, then per step = {STAGES} actions + {STAGES} rates + 1 angle):")
     head2 = (f"{'n_ctrl':>6} | {'action':>7} | {'rate':>7} | {'angle':>6} | {'problem/step':>12} | "
              f"{'driver-only':>11} | {'sum':>7} | {'measured':>8}")
     print(head2)
@@ -225,17 +255,19 @@ def main(args):
     n = np.array([r["n"] for r in rows], float)
     if len(rows) > 1:
         e_nb = fit_exponent(n, [r["numba"] for r in rows])
+        e_fu = fit_exponent(n, [r["fused"] for r in rows])
         e_np = fit_exponent(n, [r["numpy"] for r in rows])
         e_net = fit_exponent(n, [r["numba"] - r["driver"] for r in rows])
-        print(f"\nfitted exponent of step cost vs n_ctrl ({int(n[0])}..{int(n[-1])}): numba {e_nb:.3f}, "
-              f"numba minus driver-only {e_net:.3f}, numpy {e_np:.3f}")
+        print(f"\nfitted exponent of step cost vs n_ctrl ({int(n[0])}..{int(n[-1])}): numba fused {e_fu:.3f}, "
+              f"numba generic {e_nb:.3f}, generic minus driver-only {e_net:.3f}, numpy {e_np:.3f}")
         if len(rows) > 2:
-            loc = fit_exponent(n[-2:], [r["numba"] for r in rows[-2:]])
-            print(f"local exponent of the numba step cost, n_ctrl {int(n[-2])} -> {int(n[-1])}: {loc:.3f}")
+            loc = fit_exponent(n[-2:], [r["fused"] for r in rows[-2:]])
+            print(f"local exponent of the fused step cost, n_ctrl {int(n[-2])} -> {int(n[-1])}: {loc:.3f}")
     print(f"M_c solver: {', '.join(sorted({r['solver'] for r in rows}))}; all runs finite: "
           f"{all(r['finite'] for r in rows)}; subnormal entries in end states: {sum(r['subnormal'] for r in rows)}; "
-          f"max relative difference of c between backends after the timed run: "
-          f"{max(r['tip_diff'] for r in rows):.1e}")
+          f"max difference of c after the fused batch length, relative to the displacement: "
+          f"numpy vs numba generic {max(r['tip_diff'] for r in rows):.1e}, "
+          f"fused vs generic {max(r['fused_diff'] for r in rows):.1e}")
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
     if not args.quick and args.figure:
         figure(rows, args.figure)
@@ -270,7 +302,7 @@ def time_with_matmul_combine(nb, y, dt, args):
     original = rkmk.combine
     rkmk.combine = _matmul_combine
     try:
-        return time_steps(nb, y, dt, args.batch, args.repeats)[0]
+        return time_steps(nb, y, dt, args.batch, args.repeats, monitor=no_monitor)[0]
     finally:
         rkmk.combine = original
 
@@ -284,20 +316,24 @@ def figure(rows, path):
     n = np.array([r["n"] for r in rows], float)
     t_np = np.array([r["numpy"] for r in rows]) * 1e6
     t_nb = np.array([r["numba"] for r in rows]) * 1e6
+    t_fu = np.array([r["fused"] for r in rows]) * 1e6
     t_dr = np.array([r["driver"] for r in rows]) * 1e6
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10, 4))
     ax.loglog(n, t_np, "o-", label=f"numpy (slope {fit_exponent(n, t_np):.2f})")
-    ax.loglog(n, t_nb, "s-", label=f"numba (slope {fit_exponent(n, t_nb):.2f})")
+    ax.loglog(n, t_nb, "s-", label=f"numba generic (slope {fit_exponent(n, t_nb):.2f})")
+    ax.loglog(n, t_fu, "D-", label=f"numba fused (slope {fit_exponent(n, t_fu):.2f})")
     ax.loglog(n, t_dr, "^--", color="gray", label="driver only (null problem)")
-    ax.loglog(n, t_nb[0] * n / n[0], ":", color="k", lw=0.8, label="slope 1")
+    ax.loglog(n, t_fu[0] * n / n[0], ":", color="k", lw=0.8, label="slope 1")
     ax.set_xlabel("n_ctrl")
     ax.set_ylabel("time per RKMK4 step [us]")
     ax.set_title("cantilever p=4, RKMK4")
     ax.legend(fontsize=8)
-    ax2.semilogx(n, t_np / t_nb, "o-")
+    ax2.semilogx(n, t_np / t_fu, "D-", label="numpy / numba fused")
+    ax2.semilogx(n, t_np / t_nb, "s-", label="numpy / numba generic")
+    ax2.legend(fontsize=8)
     ax2.axhline(20, color="gray", ls=":", lw=0.8)
     ax2.set_xlabel("n_ctrl")
-    ax2.set_ylabel("speed-up t_numpy / t_numba")
+    ax2.set_ylabel("speed-up")
     ax2.set_ylim(bottom=0)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.join(ROOT, path)), exist_ok=True)

@@ -93,7 +93,7 @@ class Progress:
 
 
 class Checkpointer:
-    """Monitor + observer: tracks the counters, writes checkpoints at output times.
+    """Observer: writes checkpoints (with the run's counters ``stats``) at output times.
 
     A checkpoint is written at an output time when ``every_s`` wall seconds have passed
     since the last one, or when a stop was requested (signal); after a requested stop it
@@ -106,9 +106,6 @@ class Checkpointer:
         self.last_wall = time.perf_counter()
         self.stop_requested = False
         self.t_saved: float | None = None
-
-    def monitor(self, t, y, stats):
-        self.stats = stats
 
     def save(self, t, y):
         write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
@@ -278,12 +275,11 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
             return
         for obs in observers:
             obs(t, y)
+        progress(t, y, stats)
 
+    # progress at output times only: no per-step monitor, so compiled problems may run
+    # the steps between two outputs in one call (Problem.compiled_stepper)
     progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
-
-    def monitor(t, y, st):
-        ckpt.monitor(t, y, st)
-        progress(t, y, st)
 
     summary = {
         "scene": scene.name, "source": scene.source, "problem": scene.kind, "method": spec.method,
@@ -297,11 +293,11 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     try:
         if dt is not None:
             t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (t0, t_out[-1]), y0, dt, observer, t_out,
-                                                        monitor, stats=stats)
+                                                        stats=stats)
         else:
             t_reached, y_final, stats = integrate_adaptive(
                 sim.problem, tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out,
-                monitor, h_max=sim.info.get("dt_auto", np.inf), stats=stats,
+                h_max=sim.info.get("dt_auto", np.inf), stats=stats,
             )
         ckpt.save(t_reached, y_final)
     except Interrupted as exc:

@@ -39,9 +39,33 @@ def _workspace(problem: Problem, tab: ButcherTableau, y0) -> np.ndarray:
     return np.zeros((tab.stages,) + z.shape)
 
 
+def _blow_up(t: float, step: int) -> BlowUpError:
+    return BlowUpError(f"non-finite state at t={t:.6g} (step {step}); the step is beyond the stability limit", t, step)
+
+
+def _too_large(angle: float, max_angle: float, t: float, step: int) -> StepSizeError:
+    return StepSizeError(f"rotation increment {angle:.3g} rad at t={t:.6g} exceeds {max_angle:.3g} rad; reduce dt",
+                         t, step)
+
+
 def _check_finite(u: np.ndarray, t: float, step: int) -> None:
     if not np.all(np.isfinite(u)):
-        raise BlowUpError(f"non-finite state at t={t:.6g} (step {step}); the step is beyond the stability limit", t, step)
+        raise _blow_up(t, step)
+
+
+def _advance_compiled(stepper, tab: ButcherTableau, t: float, y, stop: float, dt: float, n: int,
+                      max_increment_angle: float, stats: Stats):
+    """``n`` steps from ``(t, y)`` to ``stop`` in one call of a compiled stepper
+    (:meth:`Problem.compiled_stepper`); counts and errors as in the step loop of
+    :func:`integrate_fixed`. Returns ``(t, y)``."""
+    res = stepper.advance(t, y, stop, dt, n, max_increment_angle)
+    stats.accept_many(res.steps, res.h_min, res.h_max)
+    stats.rhs_evals += tab.stages * (res.steps + (res.status != "ok"))
+    if res.status == "non-finite":
+        raise _blow_up(res.t_fail, stats.steps + 1)
+    if res.status == "angle":
+        raise _too_large(res.angle, max_increment_angle, res.t_fail, stats.steps + 1)
+    return res.t, res.y
 
 
 def integrate_fixed(
@@ -72,7 +96,9 @@ def integrate_fixed(
     t_out : array_like, optional
         Output times in ``(t0, t_end]``; ``t_end`` is always one.
     monitor : callable, optional
-        ``monitor(t, y, stats)`` after every step.
+        ``monitor(t, y, stats)`` after every step. Without one, a problem's compiled
+        stepper (:meth:`Problem.compiled_stepper`, if it has one) takes all the steps
+        between two output times in one call.
     max_increment_angle : float
         A step whose rotational increment exceeds this angle raises
         :class:`StepSizeError` (dt too large for the rotation rate).
@@ -88,7 +114,10 @@ def integrate_fixed(
         raise ValueError(f"dt must be positive, got {dt!r}")
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    K = _workspace(problem, tab, y0)
+    # duck-typed problems (no Problem base class) have no compiled stepper
+    hook = getattr(problem, "compiled_stepper", None)
+    stepper = hook(tab) if (hook is not None and monitor is None) else None
+    K = _workspace(problem, tab, y0) if stepper is None else None
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -96,6 +125,11 @@ def integrate_fixed(
     for stop in stops:
         # steps of dt from the last stop; the last one lands exactly on ``stop``
         n = max(1, int(np.ceil((stop - t) / dt - 1e-9)))
+        if stepper is not None:
+            t, y = _advance_compiled(stepper, tab, t, y, stop, dt, n, max_increment_angle, stats)
+            if observer is not None:
+                observer(t, y)
+            continue
         t_start = t
         for i in range(n):
             t_next = stop if i == n - 1 else t_start + (i + 1) * dt
@@ -105,11 +139,7 @@ def integrate_fixed(
             _check_finite(u, t_next, stats.steps + 1)
             angle = problem.rotation_angle(u)
             if angle > max_increment_angle:
-                raise StepSizeError(
-                    f"rotation increment {angle:.3g} rad at t={t_next:.6g} exceeds {max_increment_angle:.3g} rad; reduce dt",
-                    t_next,
-                    stats.steps + 1,
-                )
+                raise _too_large(angle, max_increment_angle, t_next, stats.steps + 1)
             t = t_next
             stats.accept(h)
             if monitor is not None:

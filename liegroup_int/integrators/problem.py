@@ -17,11 +17,45 @@ override :meth:`increment_rate` directly. On R^n, ``Lambda(u, y) = y + u`` and
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..groups import LieGroup
+
+
+@dataclass(frozen=True)
+class Advance:
+    """What a compiled fixed-step loop reports back (see :meth:`Problem.compiled_stepper`).
+
+    Attributes
+    ----------
+    y : state
+        State after the accepted steps.
+    t : float
+        Its time.
+    steps : int
+        Accepted steps.
+    h_min, h_max : float
+        Smallest and largest accepted step (``inf``, ``0`` if none).
+    status : {"ok", "non-finite", "angle"}
+        ``"ok"``: all requested steps taken. Otherwise the next step failed the driver's
+        checks: a non-finite increment, or a rotation increment above the bound.
+    t_fail : float
+        Time at which the failed step would have ended (NaN if none).
+    angle : float
+        Rotation angle of the failed step's increment (``"angle"`` only).
+    """
+
+    y: object
+    t: float
+    steps: int
+    h_min: float
+    h_max: float
+    status: str
+    t_fail: float
+    angle: float
 
 
 class Problem(ABC):
@@ -63,6 +97,20 @@ class Problem(ABC):
     def rotation_angle(self, u: np.ndarray) -> float:
         """Largest rotation angle carried by the increment ``u`` (0 if none)."""
         return 0.0
+
+    def compiled_stepper(self, tab):
+        """An optional compiled fixed-step loop for the tableau ``tab``, or ``None``.
+
+        A stepper has ``advance(t_start, y, t_stop, dt, n_steps, max_angle) ->``
+        :class:`Advance`, taking up to ``n_steps`` steps on the grid of
+        :func:`~liegroup_int.integrators.drivers.integrate_fixed` (step ``i`` ends at
+        ``t_start + (i + 1) dt``, the last one at ``t_stop``) with the same arithmetic as
+        :func:`~liegroup_int.integrators.rkmk.rkmk_step` plus :meth:`end_step`, and
+        stopping before the first step whose increment is non-finite or rotates by more
+        than ``max_angle``. The fixed-step driver uses it when no per-step monitor is
+        given. Default: ``None`` (the generic path).
+        """
+        return None
 
     def is_finite(self, y) -> bool:
         """Whether the state holds only finite numbers."""

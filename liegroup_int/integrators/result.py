@@ -37,6 +37,13 @@ class Stats:
         self.h_min = min(self.h_min, h)
         self.h_max = max(self.h_max, h)
 
+    def accept_many(self, steps: int, h_min: float, h_max: float) -> None:
+        """``steps`` accepted steps at once, with the extreme sizes among them."""
+        if steps > 0:
+            self.steps += steps
+            self.h_min = min(self.h_min, h_min)
+            self.h_max = max(self.h_max, h_max)
+
     def as_dict(self) -> dict:
         return {
             "steps": self.steps,

@@ -14,6 +14,12 @@ one loop over the collocation points per call:
   sweep runs in the same loop; then the backward (``U``) sweep writes the ``(4, n, 3)``
   rate.
 * :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
+* :func:`advance_kernel`: many fixed RKMK steps in one call (the driver's grid, the
+  stage combinations in the cancellation-safe form of ``rkmk.combine``, time profiles of
+  the loads evaluated per stage time by :func:`profile_value`, the Newton-Schulz end
+  step, the finiteness and rotation-angle checks), on work arrays allocated once per
+  call. :class:`FusedBeamStepper` wraps it for ``BeamProblem.compiled_stepper``, which
+  ``integrate_fixed`` uses between output times when no per-step monitor is given.
 
 SO(3) coefficients use the branch logic of :mod:`liegroup_int.groups.so3_coefficients`:
 the 12-term Horner polynomial in ``theta**2`` with the same float coefficients
@@ -59,6 +65,7 @@ import numpy as np
 from numba import njit
 
 from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
+from ...integrators.problem import Advance
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
 #: Measured (cantilever p = 4, whole stage-rate kernel, best of 30 x 500 calls):
@@ -320,17 +327,11 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
 
 # ====================================================================== stage rates
 @njit(cache=True, fastmath=False)
-def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
-    """Stage rate ``k = M_c^-1 rhs`` into ``out`` ``(4, n, 3)`` (problem._rates + _solve).
-
-    ``u`` is the stage increment (its rotational component gives ``theta_c`` for
-    ``dexpinv``); pass zeros for the plain vector field.
-    """
+def dirichlet_rows(sf, si):
+    """Boolean ``(n,)`` masks ``(fixp, fixr)``: rows whose position (and velocity) or
+    rotation (and angular velocity) rates are prescribed (zero), method.md section 3."""
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
-    n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
-    lower, dense = si[_H_L], si[_H_DENSE] != 0
-    x = np.empty((n, 12))  # right-hand sides, row i = (v, w, n_s/mu, tq) rows of point i
-    # Dirichlet rows (prescribed zero rates, method.md section 3): zero per row and field
+    n, ne = si[_H_N], endf.shape[0]
     fixp = np.zeros(n, dtype=np.bool_)
     fixr = np.zeros(n, dtype=np.bool_)
     for e in range(ne):
@@ -338,6 +339,30 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
             fixp[endi[e, 0]] = True
         if endi[e, 2] != 0:
             fixr[endi[e, 0]] = True
+    return fixp, fixr
+
+
+@njit(cache=True, fastmath=False)
+def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
+    """Stage rate ``k = M_c^-1 rhs`` into ``out`` ``(4, n, 3)`` (problem._rates + _solve).
+
+    ``u`` is the stage increment (its rotational component gives ``theta_c`` for
+    ``dexpinv``); pass zeros for the plain vector field.
+    """
+    fixp, fixr = dirichlet_rows(sf, si)
+    x = np.empty((c.shape[0], 12))
+    rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out)
+
+
+@njit(cache=True, fastmath=False)
+def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
+    """:func:`rates_kernel` without allocation: ``fixp, fixr`` from :func:`dirichlet_rows`,
+    ``x`` an ``(n, 12)`` work array (overwritten with the right-hand sides)."""
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
+    lower, dense = si[_H_L], si[_H_DENSE] != 0
+    # x: right-hand sides, row i = (v, w, n_s/mu, tq) rows of point i; Dirichlet rows
+    # (prescribed zero rates, method.md section 3) are zero per row and field
     CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
     CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
     J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
@@ -523,6 +548,181 @@ def rotation_angle_kernel(u, sf, si):
             if a != a:
                 return a
     return best
+
+
+# ====================================================================== fused fixed-step loop
+# Status codes of :func:`advance_kernel` (the driver turns them into its exceptions).
+ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
+
+# Load-profile encoding (one row per time-dependent load, see :func:`profile_row`):
+# kind code, t_on, t_off, ramp, number of table points m, table times (m), factors (m).
+_PROFILE_KINDS = {"constant": 0, "step": 1, "ramp": 2, "smooth": 3, "table": 4}
+_PR_KIND, _PR_ON, _PR_OFF, _PR_RAMP, _PR_M, _PR_TABLE = 0, 1, 2, 3, 4, 5
+
+
+@njit(cache=True, fastmath=False)
+def _interp(t, row):
+    """``np.interp(t, tt, ff)`` for the (non-decreasing) table of a profile row, with
+    NumPy's branch logic: ends held constant, the last node ``<= t`` starts the segment,
+    exact hits return the node value."""
+    m = int(row[_PR_M])
+    tt, ff = row[_PR_TABLE:_PR_TABLE + m], row[_PR_TABLE + m:_PR_TABLE + 2 * m]
+    if t > tt[m - 1]:
+        return ff[m - 1]
+    if t < tt[0]:
+        return ff[0]
+    j = 0
+    while j + 1 < m and t >= tt[j + 1]:
+        j += 1
+    if j == m - 1 or tt[j] == t:
+        return ff[j]
+    slope = (ff[j + 1] - ff[j]) / (tt[j + 1] - tt[j])
+    out = slope * (t - tt[j]) + ff[j]
+    if out != out:  # NaN one way: NumPy tries the other end of the segment
+        out = slope * (t - tt[j + 1]) + ff[j + 1]
+        if out != out and ff[j] == ff[j + 1]:
+            out = ff[j]
+    return out
+
+
+@njit(cache=True, fastmath=False)
+def profile_value(row, t):
+    """:meth:`liegroup_int.problems.beam.model.Profile.__call__` on an encoded row."""
+    kind = int(row[_PR_KIND])
+    if kind == 0:
+        return 1.0
+    if kind == 4:
+        return _interp(t, row)
+    if t < row[_PR_ON] or t >= row[_PR_OFF]:
+        return 0.0
+    if kind == 1:
+        return 1.0
+    x = min(1.0, (t - row[_PR_ON]) / row[_PR_RAMP])
+    if kind == 2:
+        return x
+    s = math.sin(0.5 * math.pi * x)
+    return s * s
+
+
+@njit(cache=True, fastmath=False)
+def _set_loads(sf, lpos, lvec, lprof, t):
+    """Time-dependent loads at ``t`` into ``sf``: ``sf[lpos[k]:+3] = lvec[k] * profile_k(t)``
+    (what :meth:`NumbaBeamKernels._set_loads` does in Python)."""
+    for k in range(lpos.shape[0]):
+        f = profile_value(lprof[k], t)
+        for d in range(3):
+            sf[lpos[k] + d] = lvec[k, d] * f
+
+
+@njit(cache=True, fastmath=False)
+def _combine(wts, m, total, Kf, h, out):
+    """``out = h sum_{l < m} wts[l] Kf[l]`` in the cancellation-safe form of
+    :func:`liegroup_int.integrators.rkmk.combine` (``total = sum(wts[:m])``):
+    ``h (sum_{l >= 1} wts[l] (Kf[l] - Kf[0]) + total Kf[0])``; ``m = 1``: ``h (wts[0] Kf[0])``.
+    ``Kf`` is the flat ``(stages, 12 n)`` view of the stage rates, ``out`` flat too."""
+    if m == 1:
+        w0 = wts[0]
+        for j in range(out.shape[0]):
+            out[j] = h * (w0 * Kf[0, j])
+        return
+    for j in range(out.shape[0]):
+        k0 = Kf[0, j]
+        acc = wts[1] * (Kf[1, j] - k0)
+        for l in range(2, m):
+            acc += wts[l] * (Kf[l, j] - k0)
+        acc += total * k0
+        out[j] = acc * h
+
+
+@njit(cache=True, fastmath=False)
+def _newton_schulz(R):
+    """``R <- (R / 2) (3 I - R^T R)`` pointwise, in place (``BeamProblem.end_step``)."""
+    for i in range(R.shape[0]):
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        # A = 3 I - R^T R (symmetric)
+        a00 = 3.0 - (r00 * r00 + r10 * r10 + r20 * r20)
+        a11 = 3.0 - (r01 * r01 + r11 * r11 + r21 * r21)
+        a22 = 3.0 - (r02 * r02 + r12 * r12 + r22 * r22)
+        a01 = 0.0 - (r00 * r01 + r10 * r11 + r20 * r21)
+        a02 = 0.0 - (r00 * r02 + r10 * r12 + r20 * r22)
+        a12 = 0.0 - (r01 * r02 + r11 * r12 + r21 * r22)
+        for a in range(3):
+            h0, h1, h2 = 0.5 * R[i, a, 0], 0.5 * R[i, a, 1], 0.5 * R[i, a, 2]
+            R[i, a, 0] = h0 * a00 + h1 * a01 + h2 * a02
+            R[i, a, 1] = h0 * a01 + h1 * a11 + h2 * a12
+            R[i, a, 2] = h0 * a02 + h1 * a12 + h2 * a22
+
+
+@njit(cache=True, fastmath=False)
+def _all_finite(x):
+    for j in range(x.shape[0]):
+        if not math.isfinite(x[j]):
+            return False
+    return True
+
+
+@njit(cache=True, fastmath=False)
+def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
+                   t_start, t_stop, dt, n_steps, max_angle):
+    """Up to ``n_steps`` fixed RKMK steps from ``(t_start, y)``, in one compiled call.
+
+    Step ``i`` ends at ``t_stop`` if it is the last one, else at ``t_start + (i + 1) dt``
+    (the grid of :func:`liegroup_int.integrators.drivers.integrate_fixed`). Per step:
+    the stages of :func:`liegroup_int.integrators.rkmk.compute_stages` (loads rewritten
+    into ``sf`` at every stage time), the combined increment, the action, the
+    Newton-Schulz end step, then the driver's checks on the increment: all finite, and
+    rotation angle ``<= max_angle``. The first failing step stops the loop.
+
+    ``y = (c, v, w, R, K, Ks)`` is read, never written. ``sf`` is the caller's private
+    copy of the constant data (its load slots are overwritten). All work arrays are
+    allocated here, once, before the step loop.
+
+    Returns
+    -------
+    (c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, angle)
+        The state after the ``steps`` accepted steps and its time ``t``; ``status`` is
+        :data:`ADVANCE_OK` or the failure of the next step (:data:`ADVANCE_NON_FINITE`,
+        :data:`ADVANCE_ANGLE`), which would have ended at ``t_fail`` and carried the
+        rotation ``angle``; ``h_min, h_max`` over the accepted steps (``inf, 0`` if none).
+    """
+    n, s = c.shape[0], b.shape[0]
+    fixp, fixr = dirichlet_rows(sf, si)
+    x = np.empty((n, 12))
+    Kst = np.empty((s, 4, n, 3))
+    Kf = Kst.reshape((s, 12 * n))
+    u = np.empty((4, n, 3))
+    uf = u.reshape(12 * n)
+    zero = np.zeros((4, n, 3))
+    c0, v0, w0, R0, K0, Ks0 = c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy()
+    c1, v1, w1, R1, K1, Ks1 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
+        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    c2, v2, w2, R2, K2, Ks2 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
+        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    t, h_min, h_max = t_start, np.inf, 0.0
+    for i in range(n_steps):
+        t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
+        h = t_next - t
+        _set_loads(sf, lpos, lvec, lprof, t)
+        rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0])
+        for r in range(1, s):
+            _combine(A[r], r, cc[r], Kf, h, uf)
+            action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
+            _set_loads(sf, lpos, lvec, lprof, t + cc[r] * h)
+            rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r])
+        _combine(b, s, 1.0, Kf, h, uf)
+        action_kernel(u, c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2, sf, si)
+        _newton_schulz(R2)
+        if not _all_finite(uf):
+            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan
+        ang = rotation_angle_kernel(u, sf, si)
+        if ang > max_angle:
+            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang
+        c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
+        t = t_next
+        h_min, h_max = min(h_min, h), max(h_max, h)
+    return c0, v0, w0, R0, K0, Ks0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0
 
 
 # ====================================================================== Python side
@@ -723,3 +923,100 @@ class NumbaBeamKernels:
         x = np.array(x, dtype=float, copy=True)
         solve_kernel(x, self.sf, self.si)
         return x
+
+    def stepper(self, tab, state_cls):
+        """The fused fixed-step loop for ``tab`` (:class:`FusedBeamStepper`), or ``None``
+        when a load profile cannot be evaluated inside the compiled loop."""
+        rows = [profile_row(prof) for _, _, prof in self._profiles]
+        if any(r is None for r in rows):
+            return None
+        return FusedBeamStepper(self, tab, state_cls, rows)
+
+
+def profile_row(prof) -> np.ndarray | None:
+    """Encode a :class:`~liegroup_int.problems.beam.model.Profile` for :func:`profile_value`.
+
+    Returns ``None`` for anything the compiled evaluation does not reproduce: objects
+    other than a ``Profile`` (a subclass may override ``__call__``), unknown kinds, and
+    tables whose times are not finite and non-decreasing (``np.interp`` assumes sorted
+    nodes; the driver then keeps the generic path, which calls the profile in Python).
+    """
+    from .model import Profile
+
+    if type(prof) is not Profile or prof.kind not in _PROFILE_KINDS:
+        return None
+    table = np.asarray(prof.table, dtype=float).reshape(-1, 2) if prof.kind == "table" else np.zeros((0, 2))
+    tt, ff = table[:, 0], table[:, 1]
+    if prof.kind == "table" and not (np.all(np.isfinite(tt)) and np.all(np.diff(tt) >= 0)):
+        return None
+    head = [_PROFILE_KINDS[prof.kind], prof.t_on, prof.t_off, prof.ramp, len(tt)]
+    return np.concatenate([np.asarray(head, dtype=float), tt, ff])
+
+
+class FusedBeamStepper:
+    """Fixed-step RKMK for one beam problem and tableau, many steps per compiled call.
+
+    What :func:`liegroup_int.integrators.drivers.integrate_fixed` uses (through
+    ``BeamProblem.compiled_stepper``) between output times when no per-step monitor is
+    given: the same stage kernels, increment combinations, end step and step checks as
+    the generic driver, fused into :func:`advance_kernel`.
+
+    Parameters
+    ----------
+    kernels : NumbaBeamKernels
+        Constant data of the problem (copied: the stage loads are written into a
+        private copy of ``sf``, so the generic wrappers' load cache stays valid).
+    tab : ButcherTableau
+        Explicit tableau (``A_f, b_f, c_f``).
+    state_cls : type
+        State class built from ``(c, v, w, R, K, K_s)`` (``BeamState``).
+    rows : list of ndarray
+        :func:`profile_row` of each time-dependent load of ``kernels._profiles``.
+    """
+
+    def __init__(self, kernels, tab, state_cls, rows):
+        self.state_cls = state_cls
+        self.stages = int(tab.stages)
+        self.sf = kernels.sf.copy()
+        self.si = kernels.si
+        self.A = np.ascontiguousarray(tab.A_f, dtype=float)
+        self.b = np.ascontiguousarray(tab.b_f, dtype=float)
+        self.c = np.ascontiguousarray(tab.c_f, dtype=float)
+        k = len(rows)
+        width = max((r.size for r in rows), default=_PR_TABLE)
+        self.lpos = np.array([a for a, _, _ in kernels._profiles], dtype=np.int64).reshape(k)
+        self.lvec = np.array([vec for _, vec, _ in kernels._profiles], dtype=float).reshape(k, 3)
+        self.lprof = np.zeros((k, width))
+        for j, r in enumerate(rows):
+            self.lprof[j, :r.size] = r
+
+    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float):
+        """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
+        ends at ``t_start + (i + 1) dt``, the last at ``t_stop``).
+
+        Parameters
+        ----------
+        t_start : float
+        y : BeamState
+            Start state (not modified).
+        t_stop : float
+            End of the last step.
+        dt : float
+            Nominal step.
+        n_steps : int
+            Number of steps, ``>= 1``.
+        max_angle : float
+            A step whose increment rotates any collocation point by more than this
+            stops the loop (:data:`ADVANCE_ANGLE`).
+
+        Returns
+        -------
+        liegroup_int.integrators.problem.Advance
+        """
+        arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
+        out = advance_kernel(*arr, self.sf, self.si, self.A, self.b, self.c, self.lpos, self.lvec,
+                             self.lprof, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
+        c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, ang = out
+        status = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}[status]
+        return Advance(self.state_cls(c, v, w, R, K, Ks), float(t), int(steps), float(h_min), float(h_max),
+                       status, float(t_fail), float(ang))

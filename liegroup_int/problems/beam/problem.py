@@ -249,6 +249,16 @@ class BeamProblem(Problem):
             return self._nb.rotation_angle(u)
         return float(np.max(angle(self.N0 @ u[1])))
 
+    def compiled_stepper(self, tab):
+        """Fused fixed-step loop (backend="numba" only): every stage, combination, end
+        step and step check of many steps in one compiled call
+        (:class:`.kernels_numba.FusedBeamStepper`). ``None`` with the NumPy backend, and
+        when a load profile is not a plain :class:`Profile` (the generic path then calls
+        it in Python)."""
+        if self._nb is None:
+            return None
+        return self._nb.stepper(tab, BeamState)
+
     # ------------------------------------------------------------------ stage kernels
     def _solve(self, rhs: np.ndarray) -> np.ndarray:
         """Dirichlet rows, then one ``M_c`` solve for all 12 columns -> ``(4, n, 3)``."""
