@@ -165,8 +165,12 @@ def test_pickled_problem_keeps_time_varying_loads():
     nb2 = pickle.loads(pickle.dumps(nb))
     y = pb.initial_state()
     u = pb.zero_increment(y)
+    # at rest without load the rate is pure round-off (measured 6e-9 in the NumPy backend,
+    # which the compiled kernels, with FMA contraction, round differently): the backends
+    # agree to 1e-12 of the load's rate plus twice that floor
+    floor = np.max(np.abs(pb.increment_rate(6.0, y, u)))
     for t in (1.0, 2.5, 1.0, 6.0):  # revisits a time (per-time cache) and ends with zero load
         np.testing.assert_array_equal(nb2.increment_rate(t, y, u), nb.increment_rate(t, y, u))
         k_np = pb.increment_rate(t, y, u)
         load_scale = max(np.max(np.abs(pb.increment_rate(2.5, y, u)[f])) for f in (2, 3))
-        assert np.max(np.abs(nb2.increment_rate(t, y, u) - k_np)) <= TOL * load_scale
+        assert np.max(np.abs(nb2.increment_rate(t, y, u) - k_np)) <= TOL * load_scale + 2.0 * floor
