@@ -4,34 +4,62 @@ Scene: the built-in ``cantilever`` (p = 4, clamped-free, tip force), RKMK4, numb
 started (as :mod:`beam_backends`) from a smooth deformed moving state so that nothing
 underflows to subnormal numbers.
 
+What one step costs on the public path. ``integrate_fixed`` without a per-step monitor
+runs all steps between two output times in one compiled call,
+``BeamProblem.compiled_stepper(tab)`` -> ``FusedBeamStepper.advance`` ->
+``advance_kernel``: per step 4 ``rates_into`` + 4 ``action_kernel`` + the 4 increment
+combinations (``_combine``), the Newton-Schulz end step (``_newton_schulz``), the
+finiteness check (``_all_finite``) and the rotation-angle check
+(``rotation_angle_kernel``), all compiled, on work arrays allocated once per call. With a
+monitor, the generic Python/NumPy step loop runs instead (kept here as the "generic loop"
+row, with a no-op monitor).
+
 What it prints (Markdown):
 
 1. **Flop count** of one stage per collocation point, analytic, per kernel section (a
    table of adds/subs, muls, divisions, sqrt and libm calls, derived from the source of
-   ``kernels_numba.py``; FMAs would count 2 but the kernels are compiled with
-   ``fastmath=False`` so LLVM never contracts, see 2). The per-control-point work of the
-   driver (increment combinations, Newton-Schulz ``end_step``, rotation-angle check) is
-   counted too and spread over the stages of one step. The banded ``M_c`` solve is
-   counted from the actual non-zero multipliers of the LU factors (the kernel skips zeros).
-2. **Assembly cross-check**: the compiled kernels are recompiled into a private numba
-   cache directory (cached code cannot be inspected), ``inspect_asm`` of the C-contiguous
-   specialization is split into functions and basic blocks, natural loops are found
-   (dominators, back edges), and scalar / packed FP arithmetic instructions
-   (``v{add,sub,mul,div,sqrt}{s,p}{d,s}``, ``vfmadd*``...) and libm calls are counted in
-   the straight-line part of the per-point loop and per iteration of its inner loops; the
-   analytic static counts (every branch once) are printed next to them.
+   ``kernels_numba.py``). The per-point kernels (``action_kernel``, ``rates_into`` and
+   their inlined helpers) are compiled with ``fastmath={"contract"}``: LLVM fuses
+   mul-add pairs into FMAs, which count 2 flops, so the flop count is that of the
+   source (section 2 checks that each FMA replaces exactly one mul and one add). The
+   Taylor series of the SO(3) coefficients use an angle-dependent number of terms
+   (``_n_terms``: 5 below 0.05 rad, 7 below 0.25 rad, else all 12; closed forms at and
+   above ``TAYLOR_THRESHOLD``): the script replays the timed run (same start state, dt
+   and number of steps) through the generic loop, records the angle at every
+   collocation point of every action and stage-rate call, and counts the Horner steps
+   actually taken (branch shares and the largest stage angle are printed). The
+   per-control-point work of the fused step loop (combinations, Newton-Schulz end step,
+   finiteness check, rotation-angle check; all compiled, plain IEEE) is counted too and
+   spread over the stages of one step. The banded ``M_c`` solve is counted from the
+   actual non-zero multipliers of the LU factors (the kernel skips zeros).
+2. **Assembly cross-check** of the code the fused step runs: ``advance_kernel`` is
+   recompiled into a private numba cache directory (cached code cannot be inspected);
+   its ``inspect_asm`` contains ``advance_kernel`` itself and every callee compiled into
+   it (``action_kernel``, ``rates_into``, ``_combine``, ``_newton_schulz``,
+   ``rotation_angle_kernel``, ...; ``_all_finite`` is inlined). The text is split into
+   functions and basic blocks, natural loops are found (dominators, back edges), and
+   scalar / packed FP arithmetic instructions (``v{add,sub,mul,div,sqrt}{s,p}{d,s}``,
+   ``vf{,n}m{add,sub}*``; packed ones weighted by their lanes) and libm calls are counted
+   in the straight-line part of each per-point loop and per iteration of the inner
+   loops; the analytic static counts (every branch once) are printed next to them.
 3. **Timing** (process CPU time, BLAS on one thread, warm-up excluded, best of
-   ``--repeats`` batches of >= ``--batch`` s): each compiled kernel called directly
-   (preallocated outputs), the Python wrappers, and a whole step through the public driver
-   ``integrate_fixed``; ns per stage per collocation point; achieved GFLOP/s and ratio to
-   the flop bounds of one core at ``--ghz`` (default 2.6): vector AVX2+FMA peak 16 DP
-   flop/cycle, scalar FMA peak 4 DP flop/cycle (2 FMA ports), scalar without FMA 2 DP
-   flop/cycle; plus a measured scalar (fastmath=False) and vector (fastmath=True) FP
-   throughput of this machine (micro-kernels).
-4. **Where the time goes**: kernels vs Python driver per step, cProfile of the driver
-   (own time per function), the Taylor vs closed-form branch of the SO(3) coefficients,
-   fixed per-call cost vs per-point slope, bytes touched per point vs L1/L2, and (with
-   ``--pyspy``) a ``py-spy record --native`` sample breakdown.
+   ``--repeats`` batches of >= ``--batch`` s): each compiled piece of the fused step
+   called ``reps`` times from a compiled loop (no Python dispatch; the same specialization
+   ``advance_kernel`` calls), with the Taylor branch at the angles of the run, with 12
+   Horner terms, and with the closed forms; a whole step through the public driver
+   ``integrate_fixed`` (fused) and through the generic loop (no-op monitor); ns per stage
+   per collocation point; achieved GFLOP/s and ratio to the flop bounds of one core at
+   ``--ghz`` (default 2.6): vector AVX2+FMA peak 16 DP flop/cycle, scalar FMA peak 4 DP
+   flop/cycle (2 FMA ports), scalar without FMA 2 DP flop/cycle; plus measured scalar
+   (fastmath=False), scalar FMA (contract) and vector (fastmath=True) FP throughput of
+   this machine (micro-kernels).
+4. **Where the time goes**: in the fused step, the compiled pieces vs the rest (per-call
+   set-up of ``integrate_fixed``/``advance`` amortized over the steps, and the in-situ
+   difference); the generic loop for comparison (NumPy pieces, wrappers); the Horner
+   term count and closed-form branch; fixed per-call cost vs per-point slope; bytes
+   touched per point vs L1/L2; cProfile of the fused driver call; and (with ``--pyspy``)
+   a ``py-spy record --native`` sample breakdown of fused steps (JIT code has no symbols,
+   so it separates compiled code from Python and runtime, not kernels from each other).
 
 Usage (from the repository root)::
 
@@ -161,6 +189,8 @@ def mat3vec_ops(k=1):  # k products R v or R^T v
 #: calls; LLVM writes the three ``2.0 * x`` as ``x + x``, so 3 of the 8 muls appear as adds).
 CLOSED_ABCB1C1 = Ops(add=5, mul=8, div=5, libm=("sin", "cos", "sin", "pow", "pow", "pow"))
 CLOSED_D = Ops(add=1, mul=2, div=2, libm=("tan",))
+#: Branches of the SO(3) coefficients, in the order of :func:`angle_survey`.
+BRANCHES = ("Taylor, 5 terms", "Taylor, 7 terms", "Taylor, 12 terms", "closed form")
 
 
 def lu_nonzeros(nb):
@@ -173,24 +203,81 @@ def lu_nonzeros(nb):
     return int(np.count_nonzero(lu[:, :lo])), int(np.count_nonzero(lu[:, lo + 1:])), lo, up
 
 
-def flop_model(nb, tab=TAB):
+def angle_survey(pb, y, dt, steps):
+    """Angles met by the SO(3) coefficients in ``steps`` steps from ``y`` (the timed run).
+
+    Replays the run through the generic step loop (a no-op monitor disables the fused
+    loop; same arithmetic up to FMA round-off) with ``action`` and ``increment_rate``
+    wrapped to record ``|N0 u_theta|`` at every collocation point of every call: the
+    angle ``action_kernel`` feeds ``_coef_ABCB1C1`` and ``rates_into`` feeds ``_coef_D``
+    (stage 1 passes ``u = 0``). Each angle is classified with the kernel's own rule
+    (``kernels_numba._n_terms``, run as Python, and ``TAYLOR_THRESHOLD``).
+
+    Returns ``{"action" | "rates": dict(max=, calls=, points=, share=(4 fractions in
+    BRANCHES order), steps=mean Horner steps per point on the Taylor branch)}``.
+    """
+    nt = int(pb._nb.si[kn._H_NT])
+    thr = float(kn.TAYLOR_THRESHOLD)
+    N0 = np.asarray(pb.N0, dtype=float)
+    rec = {"action": [], "rates": []}
+    act, rate = pb.action, pb.increment_rate
+
+    def action(u, yy):
+        rec["action"].append(np.linalg.norm(N0 @ u[1], axis=1))
+        return act(u, yy)
+
+    def increment_rate(t, yy, u):
+        rec["rates"].append(np.linalg.norm(N0 @ u[1], axis=1))
+        return rate(t, yy, u)
+
+    pb.action, pb.increment_rate = action, increment_rate  # instance attributes shadow the methods
+    try:
+        integrate_fixed(pb, TAB, (0.0, steps * dt), y, dt, monitor=lambda t, yy, st: None)
+    finally:
+        del pb.action, pb.increment_rate
+    terms = np.vectorize(lambda t2: kn._n_terms.py_func(t2, nt), otypes=[int])
+    out = {}
+    for key, angs in rec.items():
+        a = np.concatenate(angs)
+        m = terms(a * a)
+        closed = a >= thr
+        share = tuple(float(np.mean((m == k) & ~closed)) for k in (min(5, nt), min(7, nt), nt)) + \
+            (float(np.mean(closed)),)
+        if nt <= 7:  # short tables: 5, 7 and 12 terms may coincide
+            share = (float(np.mean(~closed)), 0.0, 0.0, float(np.mean(closed)))
+        out[key] = dict(max=float(a.max()), calls=len(angs), points=a.size, share=share,
+                        steps=float(np.mean(np.where(closed, 0, m - 1))))
+    return out
+
+
+def horner_label(sv):
+    """``5 terms 100%`` style summary of one :func:`angle_survey` entry."""
+    return ", ".join(f"{b} {100 * f:.3g}%" for b, f in zip(BRANCHES, sv["share"]) if f)
+
+
+def flop_model(nb, survey, tab=TAB):
     """Per-point operation counts of one stage, section by section.
 
-    Returns a list of rows ``(kernel, section, ops_per_exec, execs_per_point, static)``
+    ``survey`` is :func:`angle_survey` of the timed run: it sets how many Horner steps
+    (``_n_terms`` - 1) and how many closed forms are executed per point on average.
+
+    Returns a list of rows ``(kernel, section, ops_per_exec, execs_per_point, kind)``
     where ``execs_per_point`` is how often the section runs per collocation point and
-    stage (loop trip counts, 1/n for once-per-call work, 0 for branches not taken in this
-    scene) and ``static`` the ops of one copy of the source (for the asm comparison:
-    ``None`` if the section is not straight-line code of the per-point loop).
+    stage (loop trip counts, 1/n for once-per-call work, 1/stages for once-per-step
+    work, 0 for branches not taken in this scene) and ``kind`` names the asm region
+    the section's static code belongs to (section 2).
     """
     k = nb._nb
     n, W = k.n, k.bandwidth
-    nt = int(k.si[kn._H_NT])  # Horner terms
     nL, nU, lo, up = lu_nonzeros(nb)
     pb = nb
     ends = pb.ends
     nforce = sum(e.force_neumann for e in ends)
     nmom = sum(e.moment_neumann for e in ends)
+    kv = W if pb.tau != 0.0 else 0
     S = tab.stages
+    sa, sr = survey["action"], survey["rates"]
+    taylor_a, taylor_r = 1.0 - sa["share"][3], 1.0 - sr["share"][3]
     rows = []
     A, R_ = "action", "rates"
     # ---- action_kernel (per collocation point)
@@ -198,20 +285,26 @@ def flop_model(nb, tab=TAB):
         (A, "c, v, w += eta, dv, dw", Ops(add=9), 1, "line"),
         (A, "band matvecs theta, theta_s, theta_ss (N0,N1,N2; W iters)", Ops(add=9, mul=9), W, "band"),
         (A, "|theta| (sqrt)", Ops(add=2, mul=3, sqrt=1), 1, "line"),
-        (A, f"A,B,C,B1,C1: Horner, 5 chains x {nt - 1} steps (+ t^2)", Ops(add=5, mul=5), nt - 1, "horner5"),
-        (A, "  t^2 for Horner", Ops(mul=1), 1, "coef"),
-        (A, "  [closed form if |theta| >= 1: not taken]", CLOSED_ABCB1C1, 0, "coef"),
+        (A, f"A,B,C,B1,C1: Horner, 5 chains x {sa['steps']:.3g} steps per point ({horner_label(sa)}; "
+            f"max angle {sa['max']:.2g} rad)", Ops(add=5, mul=5), sa["steps"], "horner5"),
+        (A, "  t^2 for Horner", Ops(mul=1), taylor_a, "coef"),
+        (A, "  [closed form if |theta| >= 1]" + ("" if sa["share"][3] else ": not taken"),
+         CLOSED_ABCB1C1, sa["share"][3], "coef"),
         (A, "exp(hat theta) = I + A X + B X^2 (9 entries)", Ops(add=12, mul=15), 1, "line"),
         (A, "R' = exp(hat theta) R (3x3 . 3x3)", Ops(add=18, mul=27), 1, "line"),
         (A, "g = J_r theta_s, g_s (5 crosses, theta.theta_s, combos)", Ops(add=38, mul=53), 1, "line"),
         (A, "R^T g, R^T g_s", mat3vec_ops(2), 1, "line"),
         (A, "K' = K + x, K_s' = K_s - K x x + x_s", Ops(add=12, mul=6), 1, "line"),
     ]
-    # ---- rates_kernel (per collocation point)
+    # ---- rates_into (per collocation point)
     rows += [
         (R_, "band matvecs c_s, c_ss, v_c, w_c, theta_c (W iters)", Ops(add=15, mul=15), W, "band"),
         (R_, "strains Gamma, Gamma_s (R^T c_s, R^T c_ss, K x)", Ops(add=21, mul=24), 1, "line"),
         (R_, "K - K0, K_s - K0_s", Ops(add=6), 1, "line"),
+        (R_, "  [Kelvin-Voigt band matvecs v_s, v_ss, w_s, w_ss (W iters)]" + ("" if kv else ": tau = 0"),
+         Ops(add=12, mul=12), kv, "kvband"),
+        (R_, "  [Kelvin-Voigt strain rates, tau x rates]" + ("" if kv else ": tau = 0"),
+         Ops(add=66, mul=78), 1 if kv else 0, "line"),
         (R_, "resultants N = CN Gamma, M = CM (K - K0)", Ops(mul=6), 1, "line"),
         (R_, "n_s = R (K x N + CN Gamma_s)", Ops(add=12, mul=18), 1, "line"),
         (R_, "torque: -Om x J Om + K x M + CM K_s + (R^T c_s) x N", Ops(add=24, mul=33), 1, "line"),
@@ -219,32 +312,37 @@ def flop_model(nb, tab=TAB):
         (R_, "Neumann end force (once per free end)", Ops(add=12, mul=15), nforce / n, "line"),
         (R_, "Neumann end couple (once per end)", Ops(add=12, mul=15), nmom / n, "line"),
         (R_, "|theta_c| (sqrt)", Ops(add=2, mul=3, sqrt=1), 1, "line"),
-        (R_, f"D (dexpinv): Horner, 1 chain x {nt - 1} steps", Ops(add=1, mul=1), nt - 1, "horner1"),
-        (R_, "  t^2 for Horner", Ops(mul=1), 1, "line"),
-        (R_, "  [closed form of D if |theta_c| >= 1: not taken]", CLOSED_D, 0, "line"),
+        (R_, f"D (dexpinv): Horner, 1 chain x {sr['steps']:.3g} steps per point ({horner_label(sr)}; "
+             f"max angle {sr['max']:.2g} rad; stage 1 has u = 0)", Ops(add=1, mul=1), sr["steps"], "horner1"),
+        (R_, "  t^2 for Horner", Ops(mul=1), taylor_r, "line"),
+        (R_, "  [closed form of D if |theta_c| >= 1]" + ("" if sr["share"][3] else ": not taken"),
+         CLOSED_D, sr["share"][3], "line"),
         (R_, "dexpinv rows: w - theta x w / 2 + D theta x (theta x w)", Ops(add=12, mul=18), 1, "line"),
         (R_, "n_s / mu, tq / J (6 div), R J^-1 tq", Ops(add=6, mul=9, div=6), 1, "line"),
         (R_, f"M_c forward sweep L (12 rhs x {nL / n:.2f} nnz/row)", Ops(add=12, mul=12), nL / n, "sweep"),
         (R_, f"M_c backward sweep U (12 rhs x {nU / n:.2f} nnz/row)", Ops(add=12, mul=12), nU / n, "sweep_b"),
         (R_, "M_c reciprocal pivots (12 rhs)", Ops(mul=12), 1, "pivot"),
     ]
-    # ---- driver work per control point (NumPy), spread over the stages of one step
+    # ---- step work per control point, compiled in advance_kernel, spread over the stages
     comb = Ops()
     for r in range(1, S):
         comb = comb + combine_ops(int(r))
     comb = comb + combine_ops(S)
+    D = "step"
     rows += [
-        ("driver", f"increment combinations h sum a_rl k_l ({S - 1} stages + b), NumPy", comb, 1 / S, None),
-        ("driver", "end_step Newton-Schulz R (3I - R^T R)/2, NumPy", Ops(add=54, mul=54), 1 / S, None),
-        ("driver", "rotation_angle_kernel |N0 u_theta| (per step)", Ops(add=3 * W + 2, mul=3 * W + 3, sqrt=1), 1 / S, None),
+        (D, f"increment combinations h sum a_rl k_l ({S - 1} stages + b), _combine", comb, 1 / S, "comb"),
+        (D, "end step Newton-Schulz R <- (R/2)(3I - R^T R), _newton_schulz", Ops(add=36, mul=54), 1 / S, "ns"),
+        (D, "finiteness check of the increment, _all_finite (x - x per entry)", Ops(add=12), 1 / S, "finite"),
+        (D, "rotation angle check: band matvec N0 u_theta (W iters)", Ops(add=3, mul=3), W / S, "aband"),
+        (D, "rotation angle check: |.| (sqrt), max", Ops(add=2, mul=3, sqrt=1), 1 / S, "anorm"),
     ]
     return rows
 
 
 def combine_ops(m):
-    """``rkmk.combine`` with ``m`` weights and a known total, per control point (12
-    increment components): differences, matvec, ``total K0`` and ``*h``."""
-    if m == 1:  # h * (w @ K[:1]): 1 mul per component + h
+    """``_combine`` (= ``rkmk.combine``) with ``m`` weights and a known total, per control
+    point (12 increment components): differences, weighted sum, ``total K0`` and ``*h``."""
+    if m == 1:  # h * (w0 * K0): 2 muls per component
         return Ops(mul=24)
     return Ops(add=12 * (m - 1) + 12 * (m - 2) + 12, mul=12 * (m - 1) + 24)
 
@@ -368,11 +466,17 @@ def annotate_calls(lines):
 
 
 def count_fp(instrs):
+    """Counter of FP arithmetic mnemonics and calls; a packed instruction is keyed
+    ``mnemonic/lanes`` (xmm 2, ymm 4, zmm 8 doubles)."""
     c = collections.Counter()
     for s in instrs:
         m = FP_RE.match("\t" + s)
         if m:
-            c[m.group(1)] += 1
+            mn = m.group(1)
+            if re.search(r"p[ds]$", mn):
+                lanes = 8 if "%zmm" in s else (4 if "%ymm" in s else 2)
+                mn = f"{mn}/{lanes if mn.endswith('d') else 2 * lanes}"
+            c[mn] += 1
         m = re.match(r"^\s*callq\s+([A-Za-z_][\w\.]*)", s)
         if m:
             name = m.group(1)
@@ -385,18 +489,24 @@ def count_fp(instrs):
 
 
 def asm_ops(c):
-    """Counter of mnemonics -> Ops (scalar only; packed reported separately)."""
-    add = sum(v for k, v in c.items() if re.match(r"v?(add|sub)sd$", k))
-    mul = sum(v for k, v in c.items() if re.match(r"v?mulsd$", k))
-    fma = sum(v for k, v in c.items() if re.match(r"v?f(n?m)(add|sub)\d*sd$", k))
-    div = sum(v for k, v in c.items() if re.match(r"v?divsd$", k))
-    sq = sum(v for k, v in c.items() if re.match(r"v?sqrtsd$", k))
+    """Counter of mnemonics -> Ops in flops (packed instructions weighted by lanes)."""
+    tot = collections.Counter()
+    for k, v in c.items():
+        m = re.match(r"^v?(f(?:n?m)(?:add|sub)\d*|add|sub|mul|div|sqrt)(sd|pd/(\d+))$", k)
+        if not m:
+            continue
+        op = "fma" if m.group(1).startswith("f") else {"sub": "add"}.get(m.group(1), m.group(1))
+        tot[op] += v * (int(m.group(3)) if m.group(3) else 1)
     libm = tuple(sorted(k[5:] for k, v in c.items() if k.startswith("call ") and k[5:] in LIBM for _ in range(v)))
-    return Ops(add, mul, fma, div, sq, libm)
+    return Ops(tot["add"], tot["mul"], tot["fma"], tot["div"], tot["sqrt"], libm)
 
 
 def packed_count(c):
-    return sum(v for k, v in c.items() if re.match(r"v?f?n?m?(add|sub|mul|div|sqrt)\d*p[ds]$", k))
+    return sum(v for k, v in c.items() if "/" in k)
+
+
+def fma_count(c):
+    return sum(v for k, v in c.items() if re.match(r"v?f(n?m)(add|sub)", k))
 
 
 def kernel_asm(kernel, args):
