@@ -458,7 +458,7 @@ def plot(result: Result, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.2))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6.4))
     ok = [r for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
     families = sorted({r.family for r in result.ours})
     colors = {f: plt.cm.viridis(i / max(1, len(families) - 1)) for i, f in enumerate(families)}
@@ -484,7 +484,7 @@ def plot(result: Result, path: Path) -> Path:
     ax.set_ylabel("max tip error against the fine RKMK6 reference [m]")
     ax.set_title(f"{result.plan.scene}, T = {result.plan.t_end:g} s: space + time error "
                  f"(reference {result.reference.resolution})", fontsize=9)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     tr = result.time_reference
     for fam in families:
         runs = sorted((r for r in ok if r.family == fam and np.isfinite(r.time_error) and r.time_error > 0),
@@ -494,7 +494,7 @@ def plot(result: Result, path: Path) -> Path:
     bx.set_xlabel("CPU time [s]")
     bx.set_ylabel(f"max tip error against RKMK6 on {tr.resolution} [m]")
     bx.set_title(f"time error on {tr.resolution} (paper Fig. 4(b)/5(b))", fontsize=9)
-    bx.legend(fontsize=7)
+    bx.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     for a in (ax, bx):
         a.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
