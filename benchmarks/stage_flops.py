@@ -120,6 +120,7 @@ for p in (ROOT, HERE):
 
 import numpy as np  # noqa: E402
 
+from liegroup_int.integrators import MAX_INCREMENT_ANGLE as MAX_ANGLE  # noqa: E402
 from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
 from liegroup_int.problems.beam import BeamProblem  # noqa: E402
 from liegroup_int.problems.beam import kernels_numba as kn  # noqa: E402
@@ -540,49 +541,52 @@ def loop_report(lines):
     return out, whole
 
 
-def asm_crosscheck(nb, y, u, rows):
-    """Compare static per-section counts with the compiled code. Returns Markdown lines."""
+def fused_args(pb, y):
+    """``(stepper, args)``: the fused stepper of the timed run and the argument tuple its
+    ``advance`` passes to ``advance_kernel`` (one step from ``y``)."""
+    st = pb.compiled_stepper(TAB)
+    arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
+    dt = 1e-9
+    args = (*arr, st.sf, st.si, st.A, st.b, st.c, st.lpos, st.lvec, st.lprof, 0.0, dt, dt, 1,
+            float(MAX_ANGLE))
+    return st, args
+
+
+def asm_crosscheck(nb, y, rows):
+    """Compare static per-section counts with the code the fused step runs (the
+    ``advance_kernel`` compile unit and its callees). Returns Markdown lines."""
     k = nb._nb
-    n = k.n
-    outs = [np.empty((n, 3)) for _ in range(3)] + [np.empty((n, 3, 3))] + [np.empty((n, 3)) for _ in range(2)]
-    a_args = (u, y.c, y.v, y.w, y.R, y.K, y.K_s, outs[0], outs[1], outs[2], outs[3], outs[4], outs[5], k.sf, k.si)
-    r_args = (y.c, y.v, y.w, y.R, y.K, y.K_s, u, k.sf, k.si, np.empty((4, n, 3)))
-    kn.action_kernel(*a_args)
-    kn.rates_kernel(*r_args)
-    xs = np.array(u)
-    kn.solve_kernel(xs, k.sf, k.si)
-    lines = []
-    vec_total = 0
     W = k.bandwidth
+    _, args = fused_args(nb, y)
+    kn.advance_kernel(*args)
+    text = kernel_asm(kn.advance_kernel, args)
     model = {}
     for kern, sec, ops, ex, kind in rows:
         if kind:
             model.setdefault((kern, kind), Ops())
             model[(kern, kind)] = model[(kern, kind)] + ops
     res = {}
-    for name, kernel, args in (("action", kn.action_kernel, a_args), ("rates", kn.rates_kernel, r_args),
-                               ("solve", kn.solve_kernel, (xs, k.sf, k.si))):
-        text = kernel_asm(kernel, args)
-        funcs = asm_functions(text)
-        for fname, flines in funcs.items():
-            if fname.startswith("_ZN7cpython") or fname.startswith("cfunc."):
-                continue
-            rep, whole = loop_report(flines)
-            vec_total += packed_count(whole)
-            m = re.search(r"kernels_numba(\d+)", fname)  # Itanium mangling: <length><name>
-            short = fname[m.end():m.end() + int(m.group(1))] if m else fname[:30]
-            res[(name, short)] = (rep, whole)
-    # --- rows of the comparison
+    for fname, flines in asm_functions(text).items():
+        if fname.startswith("_ZN7cpython") or fname.startswith("cfunc.") or "kernels_numba" not in fname:
+            continue
+        m = re.search(r"kernels_numba(\d+)", fname)  # Itanium mangling: <length><name>
+        res[fname[m.end():m.end() + int(m.group(1))]] = loop_report(flines)
+
     def fmt(o):
-        s = f"{o.mul} mul, {o.add} add/sub, {o.div} div, {o.sqrt} sqrt"
+        s = f"{o.mul} mul, {o.add} add/sub"
         if o.fma:
             s += f", {o.fma} FMA"
+        if o.div or o.sqrt:
+            s += f", {o.div} div, {o.sqrt} sqrt"
         if o.libm:
             s += ", " + "+".join(sorted(o.libm))
         return s
 
+    def eq(o):  # (mul, add, div, sqrt) with each FMA counted as one mul and one add
+        return (o.mul + o.fma, o.add + o.fma, o.div, o.sqrt)
+
     def point_loop(rep):
-        # outermost loop that contains the sqrt of |theta|
+        # outermost loop that contains a sqrt (|theta| per collocation point)
         cands = [r for r in rep if any(kk.endswith("sqrtsd") for kk in r["incl"])]
         return max(cands, key=lambda r: (sum(r["incl"].values()), -r["depth"])) if cands else None
 
@@ -591,95 +595,181 @@ def asm_crosscheck(nb, y, u, rows):
                    tuple((collections.Counter(x.libm) - collections.Counter(y.libm)).elements()))
 
     def unroll(asm, body):
-        """Integer k with asm == k * body (mul and add), else None."""
-        if body.mul == 0 or asm.mul % body.mul or asm.add != asm.mul // body.mul * body.add:
+        """Integer k with asm == k * body (FMA = mul + add), else None."""
+        a, b = eq(asm), eq(body)
+        ref = b[0] or b[1]
+        val = a[0] if b[0] else a[1]
+        if not ref or val % ref or val == 0:
             return None
-        return asm.mul // body.mul
+        kk = val // ref
+        return kk if a == tuple(kk * x for x in b) else None
 
-    table = []  # (region, analytic, asm, note)
-    # ---- action_kernel + _coef_ABCB1C1
-    rep, whole = res[("action", "action_kernel")]
+    def remainder(asm, static, body, kmax=8):
+        """Remainder iterations ``r`` of an unrolled loop found in straight-line code:
+        the ``r`` (0 <= r < kmax) for which ``static + r * body`` comes closest to
+        ``asm`` in flops (within 2 flops; LLVM may fold a multiply)."""
+        d = asm.flops - static.flops
+        r = round(d / body.flops) if body.flops else 0
+        return r if 0 < r < kmax and abs(d - r * body.flops) <= 2 else 0
+
+    def negated(c):  # x -= m * y contracts to vfnmadd
+        f = [kk for kk in c if re.match(r"v?f(n?m)", kk)]
+        return bool(f) and all(re.match(r"v?fnm", kk) for kk in f)
+
+    table = []  # (region, analytic static, asm, note)
+    # ---- action_kernel (+ inlined _coef_ABCB1C1, _n_terms, _cross)
+    rep, whole = res["action_kernel"]
     pl = point_loop(rep)
     if pl:
-        line = asm_ops(pl["excl"])
-        table.append(("action_kernel: per-point straight-line code", model[("action", "line")], line,
-                      f"calls: {', '.join(k[5:] for k in pl['excl'] if k.startswith('call ')) or '-'}"))
+        hk = None
         for r in (r for r in rep if r["header"] in pl["inner"]):
-            ao = asm_ops(r["excl"])
-            k = unroll(ao, model[("action", "band")])
-            table.append(("action_kernel: inner loop (band matvec), per asm iteration", model[("action", "band")], ao,
-                          f"unrolled x{k}, runs W = {W} times" if k else "unmatched"))
-    coef = [v for (kk, s_), v in res.items() if kk == "action" and s_.startswith("_coef_ABCB1C1")]
-    if coef:
-        rep_c, whole_c = coef[0]
-        in_loops = Ops()
-        for r in (r for r in rep_c if r["depth"] == 0):
             ao = asm_ops(r["incl"])
-            in_loops = in_loops + ao
-            k = unroll(ao, model[("action", "horner5")])
-            table.append(("_coef_ABCB1C1: Horner loop, per asm iteration", model[("action", "horner5")], ao,
-                          f"unrolled x{k} (5 chains per source step)" if k else "unmatched"))
-        rest = sub_ops(asm_ops(whole_c), in_loops)
-        k2 = [unroll(asm_ops(r["incl"]), model[("action", "horner5")]) for r in rep_c if r["depth"] == 0]
-        nt = int(nb._nb.si[kn._H_NT])
-        peeled = model[("action", "horner5")].scale((nt - 1) % k2[0] if k2 and k2[0] else 0)
-        table.append(("_coef_ABCB1C1: outside the loop = t^2 + closed form (+ 1 peeled Horner step)",
-                      model[("action", "coef")] + peeled, rest, "both branches static; closed form not executed here"))
-    # ---- rates_kernel
-    rep, whole = res[("rates", "rates_kernel")]
+            for kind, label in (("band", "band matvec"), ("horner5", "Horner step of A,B,C,B1,C1")):
+                kk = unroll(ao, model[("action", kind)])
+                if kk:
+                    hk = kk if kind == "horner5" else hk
+                    table.append((f"action_kernel: inner loop ({label}), per asm iteration", model[("action", kind)],
+                                  ao, f"unrolled x{kk}" + (f", runs W = {W} times" if kind == "band" else
+                                                           "; trip count _n_terms - 1 (4, 6 or 11)")))
+                    break
+            else:
+                table.append(("action_kernel: inner loop (unmatched)", None, ao, ""))
+        line = asm_ops(pl["excl"])
+        static = model[("action", "line")] + model[("action", "coef")]
+        r = remainder(line, static, model[("action", "horner5")])
+        note = f"calls: {', '.join(kk[5:] for kk in pl['excl'] if kk.startswith('call ')) or '-'}; " \
+               "both coefficient branches static (closed form with libm calls)"
+        if r:
+            static = static + model[("action", "horner5")].scale(r)
+            note += f"; includes {r} remainder Horner step{'s' if r > 1 else ''} of the x{hk} unrolled loop " \
+                    "(runs when the step count is odd: 11 steps, not 4 or 6)"
+        table.append(("action_kernel: per-point straight-line code (+ inlined _coef_ABCB1C1: t^2, closed form)",
+                      static, line, note))
+    # ---- rates_into (+ inlined _coef_D, _forward_row, _finish_solve)
+    rep, whole = res["rates_into"]
     pl = point_loop(rep)
     if pl:
-        line = asm_ops(pl["excl"])
         extra, notes = Ops(), []
         for r in (r for r in rep if r["header"] in pl["inner"]):
             ao = asm_ops(r["incl"])
-            for kind, label in (("band", "band matvec"), ("sweep", "forward sweep entry (12 rhs)"),
-                                ("horner1", "Horner step of D")):
-                k = unroll(ao, model[("rates", kind)])
-                if k:
-                    table.append((f"rates_kernel: inner loop ({label}), per asm iteration", model[("rates", kind)],
-                                  ao, f"unrolled x{k}"))
+            for kind, label in (("band", "band matvec"), ("kvband", "Kelvin-Voigt band matvec (tau != 0 only)"),
+                                ("sweep", "forward sweep entry (12 rhs)"), ("horner1", "Horner step of D")):
+                if kind in ("kvband", "sweep") and negated(r["incl"]) != (kind == "sweep"):
+                    continue
+                kk = unroll(ao, model[("rates", kind)])
+                if kk:
+                    table.append((f"rates_into: inner loop ({label}), per asm iteration", model[("rates", kind)],
+                                  ao, f"unrolled x{kk}"))
                     break
             else:
                 if any(r["header"] in x["inner"] for x in rep if x["header"] in pl["inner"]):
                     continue
                 extra = extra + ao
-                notes.append(f"{ao.mul} mul + {ao.add} add in the loop over the ends")
-        table.append(("rates_kernel: per-point straight-line code + loop over the ends (all branches: "
-                      "Neumann terms, loads, D closed form)", model[("rates", "line")], line + extra,
+                notes.append(f"{fmt(ao)} in the loop over the ends")
+        table.append(("rates_into: per-point straight-line code + loop over the ends (all branches: Kelvin-Voigt, "
+                      "Neumann terms, loads, D closed form)", model[("rates", "line")], asm_ops(pl["excl"]) + extra,
                       "; ".join(notes) + "; LICM hoists R N out of the ends loop"))
         others = [r for r in rep if r["depth"] == 0 and r["header"] != pl["header"] and sum(r["incl"].values())]
         for r in others:
             ao = asm_ops(r["incl"])
-            if ao.mul == 24 and ao.add == 12:
-                table.append(("rates_kernel: backward sweep row (U entry 12 mul+sub, pivot 12 mul)",
-                              Ops(add=12, mul=12) + Ops(mul=12), ao, "_finish_solve"))
-            elif ao.mul == ao.add and ao.mul > 50:
-                table.append(("rates_kernel: dense M_c^-1 fallback (not used: banded)", None, ao,
-                              "12 rhs x 8-way unrolled dot products"))
-    lines.append("| code region | analytic (static, one copy of the source) | asm (static count) | note |")
-    lines.append("|---|---|---|---|")
+            if eq(ao) == eq(model[("rates", "sweep_b")] + model[("rates", "pivot")]):
+                table.append(("rates_into: backward sweep row (U entry 12 mul+sub, pivot 12 mul)",
+                              model[("rates", "sweep_b")] + model[("rates", "pivot")], ao, "_finish_solve"))
+            elif ao.mul + ao.fma > 50:
+                table.append(("rates_into: dense M_c^-1 fallback (not used: banded)", None, ao,
+                              "12 rhs x unrolled dot products"))
+    # ---- the step work of advance_kernel
+    forms = (("m = 1 form h (w0 K0)", Ops(mul=2)),
+             ("m >= 2 form: first difference, total K0, h (outer part for m >= 3)", Ops(add=2, mul=3)),
+             ("m >= 3: one more term w_l (K_l - K0)", Ops(add=2, mul=1)))
+    if "_combine" in res:
+        rep, whole = res["_combine"]
+        for r in sorted(rep, key=lambda r: r["header"]):
+            ao = asm_ops(r["excl"])
+            if not (ao.mul or ao.add or ao.fma):
+                continue
+            for label, body in forms:
+                kk = unroll(ao, body)
+                if kk:
+                    vec = packed_count(r["excl"])
+                    table.append((f"_combine: loop ({label}; per increment component), per asm iteration", body, ao,
+                                  f"unrolled x{kk}" + (f" ({vec} packed instructions: x{kk} = lanes x unroll)"
+                                                       if vec else " (scalar)")))
+                    break
+            else:
+                table.append(("_combine: loop (unmatched)", None, ao, ""))
+    if "_newton_schulz" in res:
+        rep, whole = res["_newton_schulz"]
+        ao = asm_ops(whole)
+        table.append(("_newton_schulz: per point (whole function)", model[("step", "ns")], ao,
+                      "fastmath=False: no FMA"))
+    if "rotation_angle_kernel" in res:
+        rep, whole = res["rotation_angle_kernel"]
+        pl = point_loop(rep)
+        if pl:
+            for r in (r for r in rep if r["header"] in pl["inner"]):
+                ao = asm_ops(r["incl"])
+                kk = unroll(ao, model[("step", "aband")])
+                table.append(("rotation_angle_kernel: inner loop (band matvec), per asm iteration",
+                              model[("step", "aband")], ao, f"unrolled x{kk}, runs W = {W} times" if kk else "unmatched"))
+            line = asm_ops(pl["excl"])
+            static = model[("step", "anorm")]
+            r = remainder(line, static, model[("step", "aband")])
+            note = "max as vmaxsd (not counted)"
+            if r:
+                static = static + model[("step", "aband")].scale(r)
+                note += f"; includes {r} remainder iteration of the unrolled band loop"
+            table.append(("rotation_angle_kernel: per-point rest (|.|, sqrt)", static, line, note))
+    rep, whole = res["advance_kernel"]
+    fin = [r for r in rep if r["depth"] > 0 and not any(kk.startswith("call ") for kk in r["incl"])
+           and eq(asm_ops(r["incl"])) == eq(Ops(add=1))]
+    for r in fin:
+        table.append(("advance_kernel: inlined _all_finite loop, per entry", Ops(add=1), asm_ops(r["incl"]),
+                      "isfinite(x) as x - x, vucomisd (12 entries per control point)"))
+    own = asm_ops(whole)
+    own = sub_ops(own, Ops(add=len(fin)))
+    table.append(("advance_kernel: own code outside the callees (per step, not per point)", None, own,
+                  "grid times t_start + (i + 1) dt, h = t_next - t, t + c_r h; h_min/h_max as vminsd/vmaxsd"))
+
+    lines = ["| code region | analytic (static, one copy of the source) | asm (static count) | note |",
+             "|---|---|---|---|"]
     for name, mo, ao, note in table:
         agree = ""
-        k = re.search(r"unrolled x(\d+)", note)
-        if k and mo is not None:
-            mo = mo.scale(int(k.group(1)))
-            name = name.replace("per asm iteration", f"per asm iteration (= {k.group(1)} source iterations)")
+        kk = re.search(r"unrolled x(\d+)", note)
+        if kk and mo is not None:
+            mo = mo.scale(int(kk.group(1)))
+            name = name.replace("per asm iteration", f"per asm iteration (= {kk.group(1)} source iterations)")
         if mo is not None and ao is not None:
             d = ao.flops - mo.flops
-            agree = f"; asm - analytic = {d:+d} flops" if d else "; identical"
+            if d:
+                agree = f"; asm - analytic = {d:+d} flops" + (" (LLVM folds a multiply)" if d == -1 else "")
+            elif eq(ao) == eq(mo) and ao.fma:
+                agree = f"; identical ({ao.fma} mul+add pairs contracted into FMAs)"
+            elif eq(ao) == eq(mo):
+                agree = "; identical"
+            else:
+                agree = "; same flops, different mul/add split"
         lines.append(f"| {name} | {fmt(mo) if mo is not None else ''} | {fmt(ao) if ao is not None else ''} | "
                      f"{note}{agree} |")
     calls = collections.Counter()
-    for (kk, s), (rep, whole) in res.items():
+    per_fn = []
+    for s, (rep, whole) in res.items():
+        per_fn.append(f"{s} {fma_count(whole)}/{packed_count(whole)}")
         for key, v in whole.items():
             if key.startswith("call "):
                 calls[f"{s}: {key[5:]}"] += v
+    nfma = sum(fma_count(w) for _, w in res.values())
+    npk = sum(packed_count(w) for _, w in res.values())
     lines.append("")
-    lines.append(f"Packed (SIMD) FP arithmetic instructions in the three kernels: **{vec_total}**; "
-                 f"FMA instructions: **{sum(v for (_, _), (_, w) in res.items() for kk, v in w.items() if 'fm' in kk)}** "
-                 "(fastmath=False: no contraction, no reassociation, so no vectorized reductions).")
+    lines.append(f"FMA instructions (static) in the compile unit: **{nfma}**; packed (SIMD) FP arithmetic "
+                 f"instructions: **{npk}**. Per function (FMA/packed): {', '.join(per_fn)}. "
+                 "action_kernel and rates_into are compiled with fastmath={'contract'} (FMA, no reassociation, so "
+                 "no vectorized reductions); the step functions keep fastmath=False (no FMA), but LLVM may still "
+                 "vectorize loops without reassociation (elementwise _combine forms).")
     lines.append("Calls found (movabsq targets): " + ", ".join(f"{k} x{v}" for k, v in sorted(calls.items())))
+    lines.append("Not cross-checked: dirichlet_rows (integer work, once per call), _set_loads / profile_value / "
+                 "_interp (no time-dependent loads in this scene: 0 per stage), work-array allocation and the state "
+                 "copies at the start of advance_kernel (no FP arithmetic).")
     return lines
 
 
@@ -704,56 +794,156 @@ def best_of(f, batch_s, repeats, inner=None):
     return best
 
 
-def time_step(pb, y, dt, batch_s, repeats):
-    integrate_fixed(pb, TAB, (0.0, 2 * dt), y, dt)  # warm-up
-    t0 = CLOCK()
-    integrate_fixed(pb, TAB, (0.0, 20 * dt), y, dt)
-    est = max((CLOCK() - t0) / 20, 1e-7)
-    N = max(5, int(np.ceil(batch_s / est)))
+def noop_monitor(t, y, stats):
+    """A per-step monitor that does nothing: ``integrate_fixed`` then takes its generic loop."""
+
+
+def steps_for(pb, y, dt, batch_s):
+    """Steps per timed batch of the fused run (>= ``batch_s`` CPU seconds, estimated)."""
+    integrate_fixed(pb, TAB, (0.0, 2 * dt), y, dt)  # warm-up: compile / cache load
+    integrate_fixed(pb, TAB, (0.0, 2 * dt), y, dt, monitor=noop_monitor)
+    t0, k = CLOCK(), 0
+    while CLOCK() - t0 < 0.03:
+        integrate_fixed(pb, TAB, (0.0, 50 * dt), y, dt)
+        k += 50
+    return max(5, int(np.ceil(batch_s / max((CLOCK() - t0) / k, 1e-7))))
+
+
+def time_step(pb, y, dt, N, repeats, monitor=None):
+    """Best CPU seconds per step of ``integrate_fixed`` over ``N`` steps from ``y`` (one
+    output time: the fused loop takes all ``N`` steps in one call unless ``monitor``)."""
+    integrate_fixed(pb, TAB, (0.0, 2 * dt), y, dt, monitor=monitor)  # warm-up
     best, y_end = np.inf, None
     for _ in range(repeats):
         t0 = CLOCK()
-        _, y_end, _ = integrate_fixed(pb, TAB, (0.0, N * dt), y, dt)
+        _, y_end, _ = integrate_fixed(pb, TAB, (0.0, N * dt), y, dt, monitor=monitor)
         best = min(best, (CLOCK() - t0) / N)
     return best, y_end
 
 
-def stage_increment(pb, y, dt, big=False):
-    """A realistic stage increment ``u = h k`` (or one with |theta_c| ~ 1.3 rad: closed forms)."""
+def stage_increment(pb, y, dt, variant="taylor"):
+    """A stage increment ``u = h k``: ``taylor`` the realistic one (angles ~1e-7 rad: 5
+    Horner terms); ``mid`` with collocation angles 0.4-0.5 rad (12 terms); ``closed``
+    with angles 1.3-1.4 rad > ``TAYLOR_THRESHOLD`` (closed forms, libm calls)."""
     u = dt * pb.increment_rate(0.0, y, pb.zero_increment(y))
-    if big:
+    if variant != "taylor":
         s = np.asarray(pb.space.curve.greville())
-        u[1, :, 0] += 1.3 + 0.1 * s  # every collocation angle > 1 rad (TAYLOR_THRESHOLD)
+        s = s / s.max()
+        u[1, :, 0] += (0.4 if variant == "mid" else 1.3) + 0.1 * s  # N0 is a partition of unity
     return np.ascontiguousarray(u)
 
 
-def time_kernels(pb, y, dt, batch_s, repeats, big=False):
+_LOOPS = {}
+
+
+def compiled_loops():
+    """njit loops that call each piece of the fused step ``reps`` times from compiled code
+    (no Python dispatch, no allocation): what ``advance_kernel`` pays per call."""
+    if _LOOPS:
+        return _LOOPS
+    from numba import njit
+
+    @njit(cache=False)
+    def action(reps, u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
+        for _ in range(reps):
+            kn.action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si)
+
+    @njit(cache=False)
+    def rates(reps, c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
+        for _ in range(reps):
+            kn.rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out)
+
+    @njit(cache=False)
+    def combine(reps, A, b, cc, Kf, h, uf):
+        s = b.shape[0]
+        for _ in range(reps):
+            for r in range(1, s):
+                kn._combine(A[r], r, cc[r], Kf, h, uf)
+            kn._combine(b, s, 1.0, Kf, h, uf)
+
+    @njit(cache=False)
+    def newton_schulz(reps, R):
+        for _ in range(reps):
+            kn._newton_schulz(R)
+
+    @njit(cache=False)
+    def finite(reps, uf):
+        k = 0
+        for _ in range(reps):
+            k += kn._all_finite(uf)
+        return k
+
+    @njit(cache=False)
+    def angle(reps, u, sf, si):
+        a = 0.0
+        for _ in range(reps):
+            a = max(a, kn.rotation_angle_kernel(u, sf, si))
+        return a
+
+    _LOOPS.update(action=action, rates=rates, combine=combine, newton_schulz=newton_schulz, finite=finite,
+                  angle=angle)
+    return _LOOPS
+
+
+def time_kernels(pb, y, dt, batch_s, repeats, variant="taylor"):
+    """Seconds per call of the compiled pieces (from compiled loops) for one stage
+    increment ``variant``; with ``taylor`` also the step pieces, the separate
+    ``solve_kernel`` and the Python wrappers of the generic loop."""
+    L = compiled_loops()
     k = pb._nb
     n = k.n
-    u = stage_increment(pb, y, dt, big)
-    outs = [np.empty((n, 3)) for _ in range(3)] + [np.empty((n, 3, 3))] + [np.empty((n, 3)) for _ in range(2)]
+    reps = max(8, 20000 // n)
+    st, _ = fused_args(pb, y)
+    sf, si = st.sf, st.si
+    u = stage_increment(pb, y, dt, variant)
+    ys = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
+    outs = [np.empty_like(a) for a in ys]
+    fixp, fixr = kn.dirichlet_rows(sf, si)
+    x = np.empty((n, 12))
     out = np.empty((4, n, 3))
-    x0 = np.array(u)
-    xs = np.array(u)
-    sf, si = k.sf, k.si
     zero = np.zeros((4, n, 3))
+
+    def per_call(fn, *a):
+        return best_of(lambda: fn(reps, *a), batch_s / 3, repeats) / reps
+
+    res = {"action_kernel": per_call(L["action"], u, *ys, *outs, sf, si),
+           "rates_into": per_call(L["rates"], *ys, u, sf, si, fixp, fixr, x, out)}
+    if variant != "taylor":
+        return res
+    S = TAB.stages
+    rng = np.random.default_rng(0)
+    Kst = np.ascontiguousarray(1e-3 * rng.standard_normal((S, 4, n, 3)))
+    Kf = Kst.reshape(S, 12 * n)
+    uf = np.ascontiguousarray(u).reshape(12 * n)
+    R = ys[3].copy()
+    xs, x0 = np.array(u), np.array(u)
+    res.update({
+        "rates_into, u = 0": per_call(L["rates"], *ys, zero, sf, si, fixp, fixr, x, out),
+        "4 x _combine": per_call(L["combine"], st.A, st.b, st.c, Kf, dt, np.empty(12 * n)),
+        "_newton_schulz": per_call(L["newton_schulz"], R),
+        "_all_finite": per_call(L["finite"], uf),
+        "rotation_angle_kernel": per_call(L["angle"], u, sf, si),
+    })
     f = {
-        "action_kernel": lambda: kn.action_kernel(u, y.c, y.v, y.w, y.R, y.K, y.K_s, *outs, sf, si),
-        "rates_kernel": lambda: kn.rates_kernel(y.c, y.v, y.w, y.R, y.K, y.K_s, u, sf, si, out),
         "copy (for solve)": lambda: np.copyto(xs, x0),
-        "copy + solve_kernel": lambda: (np.copyto(xs, x0), kn.solve_kernel(xs, sf, si)),
-        "rotation_angle_kernel": lambda: kn.rotation_angle_kernel(u, sf, si),
+        "copy + solve_kernel": lambda: (np.copyto(xs, x0), kn.solve_kernel(xs, k.sf, k.si)),
         "wrapper nb.action": lambda: pb.action(u, y),
         "wrapper nb.increment_rate": lambda: pb.increment_rate(dt, y, u),
-        "rates_kernel, u = 0": lambda: kn.rates_kernel(y.c, y.v, y.w, y.R, y.K, y.K_s, zero, sf, si, out),
     }
-    res = {name: best_of(fn, batch_s / 3, repeats) for name, fn in f.items()}
+    res.update({name: best_of(fn, batch_s / 3, repeats) for name, fn in f.items()})
     res["solve_kernel"] = res["copy + solve_kernel"] - res["copy (for solve)"]
     return res
 
 
+def time_call_cost(pb, y, dt, batch_s, repeats):
+    """CPU seconds of one ``integrate_fixed`` call of a single fused step (driver, stepper
+    construction, ``advance`` dispatch, work arrays and state copies, ``Advance``)."""
+    return best_of(lambda: integrate_fixed(pb, TAB, (0.0, dt), y, dt), batch_s / 3, repeats)
+
+
 def time_driver_pieces(pb, y, dt, batch_s, repeats):
-    """Per-step cost of the NumPy/Python pieces of one RKMK4 step (outside the kernels)."""
+    """Per-step cost of the NumPy/Python pieces of one generic-loop RKMK4 step (outside
+    the kernels; not run by the fused loop)."""
     from liegroup_int.integrators import drivers, rkmk
 
     n = pb.n
@@ -793,12 +983,13 @@ def dispatch_cost(batch_s, repeats):
 
 
 def calibrate(ghz, repeats):
-    """Measured FP throughput of one core: scalar (fastmath=False, 16 independent mul+add
-    chains) and vector (fastmath=True, contracted into FMAs and vectorized), GFLOP/s."""
+    """Measured FP throughput of one core, GFLOP/s: scalar (fastmath=False, 16 independent
+    mul+add chains), scalar FMA (fastmath={"contract"}, the same 16 chains contracted into
+    scalar FMAs, as in the per-point kernels) and vector (fastmath=True, contracted into
+    FMAs and vectorized)."""
     from numba import njit
 
-    @njit(cache=False, fastmath=False)
-    def scalar(n, m, c):
+    def chains(n, m, c):
         a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
         b0 = b1 = b2 = b3 = b4 = b5 = b6 = b7 = 0.5
         for _ in range(n):
@@ -820,6 +1011,9 @@ def calibrate(ghz, repeats):
             b7 = b7 * m + c
         return a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + b0 + b1 + b2 + b3 + b4 + b5 + b6 + b7
 
+    scalar = njit(cache=False, fastmath=False)(chains)
+    scalar_fma = njit(cache=False, fastmath={"contract"})(chains)
+
     @njit(cache=False, fastmath=True)
     def vector(x, reps, m, c):
         # x: 256 doubles (L1); each pass is 256 independent FMAs
@@ -829,24 +1023,30 @@ def calibrate(ghz, repeats):
         return x[0]
 
     N = 2_000_000
-    scalar(10, 0.999, 1e-3)
-    ts = best_of(lambda: scalar(N, 0.999, 1e-3), 0.05, repeats, inner=3)
+    out = []
+    for f in (scalar, scalar_fma):
+        f(10, 0.999, 1e-3)
+        out.append(32 * N / best_of(lambda f=f: f(N, 0.999, 1e-3), 0.05, repeats, inner=3) / 1e9)
     x = np.ones(256)
     vector(x, 2, 0.999, 1e-3)
     reps = 20000
     tv = best_of(lambda: vector(x, reps, 0.999, 1e-3), 0.05, repeats, inner=3)
-    return 32 * N / ts / 1e9, 2 * 256 * reps / tv / 1e9
+    return out[0], out[1], 2 * 256 * reps / tv / 1e9
 
 
 # ====================================================================== 4. profile
-def cprofile_step(pb, y, dt, steps):
+def cprofile_fused(pb, y, dt, steps, calls):
+    """cProfile of ``calls`` fused ``integrate_fixed`` calls of ``steps`` steps each:
+    ``(total s, rows (own s, ncalls, name))``. The compiled loop is one entry
+    (``advance_kernel``); everything else is per-call Python/NumPy overhead."""
     import cProfile
     import pstats
 
     integrate_fixed(pb, TAB, (0.0, 2 * dt), y, dt)
     prof = cProfile.Profile()
     prof.enable()
-    integrate_fixed(pb, TAB, (0.0, steps * dt), y, dt)
+    for _ in range(calls):
+        integrate_fixed(pb, TAB, (0.0, steps * dt), y, dt)
     prof.disable()
     st = pstats.Stats(prof)
     total = sum(v[2] for v in st.stats.values())
@@ -858,7 +1058,7 @@ def cprofile_step(pb, y, dt, steps):
 
 
 def spy_target(n, seconds):
-    """Run whole steps for ``seconds`` (the py-spy sampling target)."""
+    """Run whole fused steps for ``seconds`` (the py-spy sampling target)."""
     pb = make_problem(n)
     y = start_state(pb)
     dt = dt_of(n)
@@ -892,9 +1092,8 @@ def run_pyspy(n, seconds):
                 continue
             st, _, cnt = line.rpartition(" ")
             stacks[st] += int(cnt)
-    # attribute each sample: last Python frame + native leaf; JIT code has no symbols (0x...)
-    wrappers = {"NumbaBeamKernels.action": "action_kernel", "NumbaBeamKernels.increment_rate": "rates_kernel",
-                "NumbaBeamKernels.rotation_angle": "rotation_angle_kernel"}
+    # attribute each sample: last Python frame + native leaf; JIT code has no symbols (0x...),
+    # so everything compiled under FusedBeamStepper.advance is one group
     cats, coarse = collections.Counter(), collections.Counter()
     total = 0
     for st, cnt in stacks.items():
@@ -908,16 +1107,19 @@ def run_pyspy(n, seconds):
         ip = py[-1] if py else 0
         pyfn, leaf = names[ip], names[-1]
         native = len(names) - 1 > ip
-        if pyfn in wrappers and native and leaf.startswith("0x"):
-            cat = f"JIT code of {wrappers[pyfn]}"
-            coarse["compiled kernels (JIT code)"] += cnt
-        elif pyfn in wrappers:
-            cat = f"{pyfn}: {'numba dispatch / alloc: ' + leaf if native else 'Python'}"
-            coarse["kernel wrappers: dispatch, unboxing, allocation, state object"] += cnt
+        if pyfn.endswith("advance") and native and leaf.startswith("0x"):
+            cat = "JIT code under FusedBeamStepper.advance (advance_kernel and its callees)"
+            coarse["compiled fused step loop (JIT code)"] += cnt
+        elif pyfn.endswith("advance") and native and leaf.startswith(("numba_", "NRT_")):
+            cat = f"advance -> {leaf}"
+            coarse["numba C helpers called from the compiled loop (array reshapes of the sf/si views that "
+                   "_views builds in every kernel call, NRT allocation)"] += cnt
+        elif pyfn.endswith("advance") and native:
+            cat = f"advance -> {leaf}"
+            coarse["advance: dispatch, unboxing, boxing of the result (native, not JIT)"] += cnt
         else:
             cat = f"{pyfn} -> {leaf}" if native else f"{pyfn} (Python)"
-            grp = {"combine": "increment combinations (NumPy)", "BeamProblem.end_step": "end_step (NumPy matmul)"}
-            coarse[grp.get(pyfn, "other Python driver code (interpreter, checks, numpy calls)")] += cnt
+            coarse["Python driver per call (integrate_fixed, stepper construction, Advance, BeamState)"] += cnt
         cats[cat] += cnt
     cats = collections.Counter({**{f"**{k}**": v for k, v in coarse.items()}, **cats})
     return total, cats
@@ -941,8 +1143,9 @@ def pyspy_section(args):
             print(res[0])
             return
         total, cats = res
-        print(f"py-spy record --native -r 997, n_ctrl {n}: {total} samples in the timed loop "
-              "(JIT code has no symbols: a 0x... leaf under a kernel wrapper is the compiled kernel)\n")
+        print(f"py-spy record --native -r 997, n_ctrl {n}, fused steps (integrate_fixed of 200 steps per call): "
+              f"{total} samples in the timed loop (JIT code has no symbols: a 0x... leaf under "
+              "FusedBeamStepper.advance is compiled code of the fused loop)\n")
         print(md_table(["group (bold) / last Python frame -> native leaf", "share"],
                        [[c, f"{100 * v / total:.1f}%"] for c, v in cats.most_common(18)]))
         print()
@@ -956,162 +1159,233 @@ def main(args):
     sizes = [31] if args.quick else args.sizes
     repeats = 3 if args.quick else args.repeats
     ghz = args.ghz
+    S = TAB.stages
     print("# RKMK stage: flops, ns per point, flop-bound ratio (cantilever p=4, RKMK4, numba backend)")
     print(f"# python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
           f"llvm host cpu {numba.config.CPU_NAME or __import__('llvmlite.binding', fromlist=['x']).get_host_cpu_name()}, "
           f"{os.cpu_count()} cpus, BLAS threads {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}, "
           f"load average {os.getloadavg()[0]:.2f}")
-    print(f"# process CPU time, best of {repeats} batches >= {args.batch} s; clock for bounds {ghz} GHz")
+    print(f"# process CPU time, best of {repeats} batches >= {args.batch} s; clock for bounds {ghz} GHz; "
+          "whole step = integrate_fixed, fused compiled loop (advance_kernel) unless stated")
     print()
 
-    # ---------------------------------------------------------------- 1. flop model
+    # ---------------------------------------------------------------- set-up + 1. flop model
     models = {}
     for n in sorted(set(sizes) | {31, 1001}):
         pb = make_problem(n)
-        rows = flop_model(pb)
-        models[n] = (pb, rows)
+        y = start_state(pb)
+        dt = dt_of(n)
+        N = steps_for(pb, y, dt, args.batch)  # steps of one timed batch (section 3)
+        sv = angle_survey(pb, y, dt, N)
+        models[n] = dict(pb=pb, y=y, dt=dt, N=N, survey=sv, rows=flop_model(pb, sv))
     print("## 1. Flop count of one stage per collocation point (analytic, from kernels_numba.py)\n")
+    print("Angles met by the SO(3) coefficients in the timed run (replayed: same start state, dt and number of "
+          "steps as one timed batch of section 3; every collocation point of every call; term count by "
+          "kernels_numba._n_terms):\n")
+    trs = []
+    for n in sorted(models):
+        m = models[n]
+        for key, label in (("action", "action_kernel (A,B,C,B1,C1)"), ("rates", "rates_into (D)")):
+            sv = m["survey"][key]
+            trs.append([n, m["N"], f"{m['dt']:.3g}", label, sv["calls"], sv["points"], f"{sv['max']:.3g}"] +
+                       [f"{100 * f:.3g}%" for f in sv["share"]] + [f"{sv['steps']:.3g}"])
+    print(md_table(["n_ctrl", "steps", "dt", "kernel", "calls", "points", "max angle rad"] +
+                   [f"{b}" for b in BRANCHES] + ["Horner steps / point"], trs))
+    print()
     n_show = [n for n in (31, 1001) if n in models]
     head = ["kernel", "section", "ops per execution", "executions / point / stage"] + \
            [f"flops / point (n={n})" for n in n_show]
     trs = []
-    rows31 = models[n_show[0]][1]
-    for i, (kern, sec, ops, ex, _) in enumerate(rows31):
+    rows0 = models[n_show[0]]["rows"]
+    for i, (kern, sec, ops, ex, _) in enumerate(rows0):
         o = f"{ops.mul} mul + {ops.add} add" + (f" + {ops.div} div" if ops.div else "") + \
             (f" + {ops.sqrt} sqrt" if ops.sqrt else "") + (f" + {'/'.join(ops.libm)}" if ops.libm else "")
-        exs = "; ".join(f"{models[n][1][i][3]:.3g}" for n in n_show) if len(set(models[n][1][i][3] for n in n_show)) > 1 \
-            else f"{ex:.3g}"
-        trs.append([kern, sec, o, exs] + [f"{models[n][1][i][2].scale(models[n][1][i][3]).flops:.1f}" for n in n_show])
+        exs = [models[n]["rows"][i][3] for n in n_show]
+        exs = "; ".join(f"{e:.3g}" for e in exs) if len(set(exs)) > 1 else f"{ex:.3g}"
+        trs.append([kern, sec, o, exs] +
+                   [f"{models[n]['rows'][i][2].scale(models[n]['rows'][i][3]).flops:.1f}" for n in n_show])
     print(md_table(head, trs))
     print()
     summ = {}
     for n in sorted(models):
-        per = summarize_model(models[n][1])
+        per = summarize_model(models[n]["rows"])
         tot = Ops()
         for v in per.values():
             tot = tot + v
-        summ[n] = (per, tot)
-    head = ["n_ctrl"] + [f"{k} flops" for k in summ[n_show[0]][0]] + ["total flops / stage / point", "of which div+sqrt",
-                                                                      "libm calls / point (Taylor branch)"]
+        sv = models[n]["survey"]
+        libm = sv["action"]["share"][3] * len(CLOSED_ABCB1C1.libm) + sv["rates"]["share"][3] * len(CLOSED_D.libm)
+        summ[n] = (per, tot, libm)
+    head = ["n_ctrl"] + [f"{k} flops" for k in summ[n_show[0]][0]] + ["total flops / stage / point",
+                                                                      "of which div+sqrt", "libm calls / point"]
     trs = []
     for n in sorted(summ):
-        per, tot = summ[n]
-        trs.append([n] + [f"{v.flops:.1f}" for v in per.values()] + [f"**{tot.flops:.1f}**", f"{tot.div + tot.sqrt:.2f}", "0"])
+        per, tot, libm = summ[n]
+        trs.append([n] + [f"{v.flops:.1f}" for v in per.values()] +
+                   [f"**{tot.flops:.1f}**", f"{tot.div + tot.sqrt:.2f}", f"{libm:.3g}"])
     print(md_table(head, trs))
-    print("\nConventions: add/sub/mul/div/sqrt = 1 flop, FMA = 2 (none generated), libm calls listed, not counted; "
-          "common subexpressions counted once (as the compiler does); 'driver' = NumPy work per control point per step "
-          "divided by the 4 stages. Angles here are << 1 rad, so every point takes the Taylor (Horner) branch.\n")
+    print("\nConventions: add/sub/mul/div/sqrt = 1 flop, FMA = 2 flops, so contraction does not change the count "
+          "(section 2: each FMA LLVM forms in action_kernel and rates_into replaces one mul and one add); libm calls "
+          "listed, not counted; comparisons (_n_terms, max, isfinite's vucomisd) not counted; common subexpressions "
+          "counted once (as the compiler does); 'step' = work per control point per step inside the fused "
+          "advance_kernel (compiled, fastmath=False), divided by the 4 stages. Horner rows: executions = mean Horner "
+          "steps per point measured above (5 terms = 4 steps, 7 = 6, 12 = 11, closed form = 0).\n")
 
     # ---------------------------------------------------------------- 2. asm cross-check
     n0 = sizes[0]
     if not args.no_asm:
-        pb = models[n0][0] if n0 in models else make_problem(n0)
-        y = start_state(pb)
-        u = stage_increment(pb, y, dt_of(n0))
-        print(f"## 2. Cross-check against numba's generated assembly (n_ctrl = {n0} specialization)\n")
-        for line in asm_crosscheck(pb, y, u, models[n0][1] if n0 in models else flop_model(pb)):
+        m0 = models[n0]
+        print(f"## 2. Cross-check against numba's generated assembly (advance_kernel compile unit, n_ctrl = {n0} "
+              "specialization)\n")
+        for line in asm_crosscheck(m0["pb"], m0["y"], m0["rows"]):
             print(line)
         print()
 
     # ---------------------------------------------------------------- 3. timing
-    gs, gv = calibrate(ghz, repeats)
+    gs, gf, gv = calibrate(ghz, repeats)
     d15, d10 = dispatch_cost(args.batch, repeats)
     results = []
     for n in sizes:
-        pb = models[n][0] if n in models else make_problem(n)
-        rows = models[n][1] if n in models else flop_model(pb)
-        per, tot = summ[n] if n in summ else (summarize_model(rows), None)
-        if tot is None:
-            tot = Ops()
-            for v in per.values():
-                tot = tot + v
-        y = start_state(pb)
-        dt = dt_of(n)
+        m = models[n]
+        pb, y, dt, N = m["pb"], m["y"], m["dt"], m["N"]
+        per, tot, _ = summ[n]
         kt = time_kernels(pb, y, dt, args.batch, repeats)
-        kb = time_kernels(pb, y, dt, args.batch, repeats, big=True)
-        t_step, y_end = time_step(pb, y, dt, args.batch, repeats)
+        km = time_kernels(pb, y, dt, args.batch, repeats, variant="mid")
+        kb = time_kernels(pb, y, dt, args.batch, repeats, variant="closed")
+        t_step, y_end = time_step(pb, y, dt, N, repeats)
+        t_gen, y_gen = time_step(pb, y, dt, N, repeats, monitor=noop_monitor)
+        t_call = time_call_cost(pb, y, dt, args.batch, repeats)
         dp = time_driver_pieces(pb, y, dt, args.batch, repeats)
-        results.append(dict(n=n, per=per, tot=tot, kt=kt, kb=kb, dp=dp, step=t_step, sub=subnormals(y_end),
-                            finite=bool(pb.is_finite(y_end))))
-        print(f"#   n={n}: timed", flush=True)
+        results.append(dict(n=n, N=N, per=per, tot=tot, kt=kt, km=km, kb=kb, dp=dp, step=t_step, gen=t_gen,
+                            call=t_call, sub=subnormals(y_end) + subnormals(y_gen),
+                            finite=bool(pb.is_finite(y_end) and pb.is_finite(y_gen)),
+                            diff=max(float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300)) for a, b in
+                                     zip(y_end.arrays().values(), y_gen.arrays().values()))))
+        print(f"#   n={n}: timed (load average {os.getloadavg()[0]:.2f})", flush=True)
+
+    def pieces(kt):  # compiled step work besides the 4 actions and 4 rates, per step
+        return kt["4 x _combine"] + kt["_newton_schulz"] + kt["_all_finite"] + kt["rotation_angle_kernel"]
 
     print("\n## 3. Time per stage per collocation point and flop rate\n")
-    S = TAB.stages
-    head = ["n_ctrl", "action_kernel ns/pt", "rates_kernel ns/pt", "  of which solve_kernel ns/pt",
-            "angle kernel ns/pt", "whole step ns/stage/pt", "flops/stage/pt", "GFLOP/s (step)",
-            "% of 4 flop/cyc (scalar FMA)", "% of 16 flop/cyc (AVX2 FMA)", "% of 2 flop/cyc (scalar, no FMA)"]
+    head = ["n_ctrl", "steps / timed call", "action_kernel ns/pt", "rates_into ns/pt", "  solve alone (solve_kernel) ns/pt",
+            "step pieces ns/stage/pt (combine, Newton-Schulz, checks)", "**fused step** ns/stage/pt",
+            "generic loop ns/stage/pt", "flops/stage/pt", "GFLOP/s (fused step)", "% of 4 flop/cyc (scalar FMA)",
+            "% of 16 flop/cyc (AVX2 FMA)", "% of 2 flop/cyc (scalar, no FMA)", "GFLOP/s (generic loop)"]
     trs = []
     for r in results:
         n, kt, tot = r["n"], r["kt"], r["tot"]
         ns = r["step"] / (S * n) * 1e9
-        gf = tot.flops / ns
-        trs.append([n, f"{kt['action_kernel'] / n * 1e9:.1f}", f"{kt['rates_kernel'] / n * 1e9:.1f}",
-                    f"{kt['solve_kernel'] / n * 1e9:.1f}", f"{kt['rotation_angle_kernel'] / n * 1e9:.1f}",
-                    f"**{ns:.1f}**", f"{tot.flops:.0f}", f"{gf:.2f}", f"{100 * gf / (4 * ghz):.1f}",
-                    f"{100 * gf / (16 * ghz):.1f}", f"{100 * gf / (2 * ghz):.1f}"])
+        gfl = tot.flops / ns
+        trs.append([n, r["N"], f"{kt['action_kernel'] / n * 1e9:.1f}", f"{kt['rates_into'] / n * 1e9:.1f}",
+                    f"{kt['solve_kernel'] / n * 1e9:.1f}", f"{pieces(kt) / (S * n) * 1e9:.1f}",
+                    f"**{ns:.1f}**", f"{r['gen'] / (S * n) * 1e9:.1f}", f"{tot.flops:.0f}", f"{gfl:.2f}",
+                    f"{100 * gfl / (4 * ghz):.1f}", f"{100 * gfl / (16 * ghz):.1f}", f"{100 * gfl / (2 * ghz):.1f}",
+                    f"{tot.flops / (r['gen'] / (S * n) * 1e9):.2f}"])
     print(md_table(head, trs))
     print()
     head = ["n_ctrl", "action flops/pt", "action GFLOP/s", "rates flops/pt (incl. solve)", "rates GFLOP/s",
-            "kernels-only ns/stage/pt", "kernels-only GFLOP/s", "% scalar-FMA peak"]
+            "kernels-only ns/stage/pt", "kernels-only GFLOP/s", "% scalar-FMA peak", "% AVX2 peak",
+            "% of measured scalar-FMA rate"]
     trs = []
     for r in results:
         n, kt, per = r["n"], r["kt"], r["per"]
-        ta, tr = kt["action_kernel"] / n * 1e9, kt["rates_kernel"] / n * 1e9
+        ta, tr = kt["action_kernel"] / n * 1e9, kt["rates_into"] / n * 1e9
         tk = ta + tr
         fk = per["action"].flops + per["rates"].flops
         trs.append([n, f"{per['action'].flops:.0f}", f"{per['action'].flops / ta:.2f}", f"{per['rates'].flops:.0f}",
-                    f"{per['rates'].flops / tr:.2f}", f"{tk:.1f}", f"{fk / tk:.2f}", f"{100 * fk / tk / (4 * ghz):.1f}"])
+                    f"{per['rates'].flops / tr:.2f}", f"{tk:.1f}", f"{fk / tk:.2f}", f"{100 * fk / tk / (4 * ghz):.1f}",
+                    f"{100 * fk / tk / (16 * ghz):.1f}", f"{100 * fk / tk / gf:.1f}"])
     print(md_table(head, trs))
-    print(f"\nMeasured FP throughput of this core (micro-kernels, same clock): scalar mul+add without FMA "
-          f"(fastmath=False) **{gs:.2f} GFLOP/s** = {gs / ghz:.2f} flop/cycle at {ghz} GHz; vectorized FMA "
+    print("\nKernel times: each piece called max(8, 20000 // n_ctrl) times per call of a compiled loop (no Python "
+          "dispatch), same specialization as inside advance_kernel, inputs and outputs preallocated (cache-hot). "
+          "'% of 2 flop/cyc' can exceed 100 % now that FMAs are generated.")
+    print(f"Measured FP throughput of this core (micro-kernels, 16 independent chains): scalar mul+add without FMA "
+          f"(fastmath=False) **{gs:.2f} GFLOP/s** = {gs / ghz:.2f} flop/cycle at {ghz} GHz; scalar FMA "
+          f"(fastmath={{'contract'}}) **{gf:.2f} GFLOP/s** = {gf / ghz:.2f} flop/cycle (if the core retires 2 scalar "
+          f"FMAs per cycle, its clock is {gf / 4:.2f} GHz, above the nominal {ghz} GHz); vectorized FMA "
           f"(fastmath=True, L1-resident) **{gv:.2f} GFLOP/s** = {gv / ghz:.2f} flop/cycle. "
           f"Theoretical at {ghz} GHz: scalar FMA {4 * ghz:.1f}, AVX2 FMA {16 * ghz:.1f} GFLOP/s.")
     print(f"All runs finite: {all(r['finite'] for r in results)}; subnormal entries in end states: "
-          f"{sum(r['sub'] for r in results)}.\n")
+          f"{sum(r['sub'] for r in results)}; largest |fused - generic| in the end states: "
+          f"{max(r['diff'] for r in results):.2g} relative to the largest entry of each field (FMA round-off, "
+          "grown over the steps).\n")
 
     # ---------------------------------------------------------------- 4. where the time goes
     print("## 4. Where the time goes\n")
-    head = ["n_ctrl", "step us", "4 x action_kernel", "4 x rates_kernel", "angle kernel", "kernels total",
-            "wrappers (alloc + state object + dispatch) over kernels", "Python driver rest", "kernel share"]
+    print("Fused step (integrate_fixed -> advance_kernel), us per step; pieces timed from compiled loops; "
+          "'per-call set-up' = (one-step call - per-step time) / (1 - 1/N), spread over the N steps of a call.\n")
+    head = ["n_ctrl", "fused step us", "4 x action_kernel", "4 x rates_into", "4 x _combine", "_newton_schulz",
+            "_all_finite", "rotation angle", "compiled pieces total", "rest", "  of which per-call set-up / N",
+            "  in-situ rest", "action + rates share", "pieces share"]
+    trs = []
+    for r in results:
+        kt, N = r["kt"], r["N"]
+        ker = S * (kt["action_kernel"] + kt["rates_into"])
+        tot = ker + pieces(kt)
+        rest = r["step"] - tot
+        setup = (r["call"] - r["step"]) / (1 - 1 / N)
+        r["setup"] = setup
+        trs.append([r["n"], f"{r['step'] * 1e6:.1f}", f"{S * kt['action_kernel'] * 1e6:.1f}",
+                    f"{S * kt['rates_into'] * 1e6:.1f}", f"{kt['4 x _combine'] * 1e6:.2f}",
+                    f"{kt['_newton_schulz'] * 1e6:.2f}", f"{kt['_all_finite'] * 1e6:.2f}",
+                    f"{kt['rotation_angle_kernel'] * 1e6:.2f}", f"{tot * 1e6:.1f}", f"{rest * 1e6:.1f}",
+                    f"{setup / N * 1e6:.2f}", f"{(rest - setup / N) * 1e6:.1f}", f"{100 * ker / r['step']:.0f}%",
+                    f"{100 * tot / r['step']:.0f}%"])
+    print(md_table(head, trs))
+    print()
+    print("Per integrate_fixed call (fused): " + "; ".join(
+        f"n_ctrl {r['n']}: one-step call {r['call'] * 1e6:.1f} us, set-up {r['setup'] * 1e6:.1f} us "
+        f"(= {r['setup'] / r['step']:.2g} steps)" for r in results) +
+        ". The set-up is the Python driver, compiled_stepper (FusedBeamStepper: copy of sf, tableau arrays), "
+        "the advance_kernel dispatch (19 arguments), its work arrays and state copies, Advance and BeamState.\n")
+    print("Generic loop (same driver with a no-op monitor: Python step loop, NumPy combinations and end step), "
+          "us per step:\n")
+    keys = list(results[0]["dp"])
+    head = ["n_ctrl", "generic step us", "fused step us", "generic / fused",
+            "kernels (4 action + 4 rates + angle, compiled)", "wrappers over kernels (alloc + state + dispatch)"] + \
+           [f"{k} us" for k in keys] + ["Python rest"]
     trs = []
     for r in results:
         kt = r["kt"]
-        ker = S * (kt["action_kernel"] + kt["rates_kernel"]) + kt["rotation_angle_kernel"]
-        wrap = S * (kt["wrapper nb.action"] - kt["action_kernel"] + kt["wrapper nb.increment_rate"] - kt["rates_kernel"])
-        rest = r["step"] - ker - wrap
-        trs.append([r["n"], f"{r['step'] * 1e6:.1f}", f"{S * kt['action_kernel'] * 1e6:.1f}",
-                    f"{S * kt['rates_kernel'] * 1e6:.1f}", f"{kt['rotation_angle_kernel'] * 1e6:.1f}",
-                    f"{ker * 1e6:.1f}", f"{wrap * 1e6:.1f}", f"{rest * 1e6:.1f}", f"{100 * ker / r['step']:.0f}%"])
+        ker = S * (kt["action_kernel"] + kt["rates_into"]) + kt["rotation_angle_kernel"]
+        wrap = S * (kt["wrapper nb.action"] - kt["action_kernel"] + kt["wrapper nb.increment_rate"] - kt["rates_into"])
+        rest = r["gen"] - ker - wrap - sum(r["dp"].values())
+        trs.append([r["n"], f"{r['gen'] * 1e6:.1f}", f"{r['step'] * 1e6:.1f}", f"{r['gen'] / r['step']:.2f}",
+                    f"{ker * 1e6:.1f}", f"{wrap * 1e6:.1f}"] + [f"{r['dp'][k] * 1e6:.1f}" for k in keys] +
+                   [f"{rest * 1e6:.1f}"])
     print(md_table(head, trs))
-    print()
-    keys = list(results[0]["dp"])
-    print(md_table(["n_ctrl"] + [f"{k} us/step" for k in keys] + ["sum", "unexplained Python driver rest"],
-                   [[r["n"]] + [f"{r['dp'][k] * 1e6:.1f}" for k in keys] + [f"{sum(r['dp'].values()) * 1e6:.1f}",
-                    f"{(r['step'] - S * (r['kt']['wrapper nb.action'] + r['kt']['wrapper nb.increment_rate']) - r['kt']['rotation_angle_kernel'] - sum(r['dp'].values())) * 1e6:.1f}"]
-                    for r in results]))
     print(f"\nEmpty numba call with 15 / 10 array arguments (dispatch + unboxing): {d15 * 1e6:.2f} / {d10 * 1e6:.2f} us "
-          f"(action_kernel takes 15, rates_kernel 10).\n")
-    head = ["n_ctrl", "action Taylor ns/pt", "action closed form ns/pt", "rates Taylor ns/pt",
-            "rates closed form ns/pt", "rates with u = 0 ns/pt", "copy+solve us", "copy us"]
+          "(generic loop: per action / stage-rate call; fused loop: once per integrate_fixed call, advance_kernel "
+          "takes 19 arguments).\n")
+    head = ["n_ctrl", "action 5 terms ns/pt", "action 12 terms ns/pt", "action closed form ns/pt",
+            "rates 5 terms ns/pt", "rates 12 terms ns/pt", "rates closed form ns/pt", "rates with u = 0 ns/pt",
+            "copy+solve us", "copy us"]
     trs = []
     for r in results:
-        n, kt, kb = r["n"], r["kt"], r["kb"]
-        trs.append([n, f"{kt['action_kernel'] / n * 1e9:.1f}", f"{kb['action_kernel'] / n * 1e9:.1f}",
-                    f"{kt['rates_kernel'] / n * 1e9:.1f}", f"{kb['rates_kernel'] / n * 1e9:.1f}",
-                    f"{kt['rates_kernel, u = 0'] / n * 1e9:.1f}", f"{kt['copy + solve_kernel'] * 1e6:.2f}",
+        n, kt, km, kb = r["n"], r["kt"], r["km"], r["kb"]
+        trs.append([n] + [f"{d[k] / n * 1e9:.1f}" for k in ("action_kernel", "rates_into") for d in (kt, km, kb)] +
+                   [f"{kt['rates_into, u = 0'] / n * 1e9:.1f}", f"{kt['copy + solve_kernel'] * 1e6:.2f}",
                     f"{kt['copy (for solve)'] * 1e6:.2f}"])
     print(md_table(head, trs))
+    print("\n(5 terms: the angles of the run; 12 terms: every collocation angle 0.4-0.5 rad, 35 more FMAs per point "
+          "in the action's 5 chains and 7 in D, 7 more dependent steps each; closed form: 1.3-1.4 rad, libm calls.)")
     if len(results) >= 2:
         ns_ = np.array([r["n"] for r in results], float)
         print()
-        for key in ("action_kernel", "rates_kernel", "solve_kernel", "rotation_angle_kernel"):
+        for key in ("action_kernel", "rates_into", "solve_kernel", "rotation_angle_kernel", "4 x _combine",
+                    "_newton_schulz"):
             t = np.array([r["kt"][key] for r in results])
             b, a = np.polyfit(ns_, t, 1)
             print(f"- {key}: fixed cost per call {a * 1e6:.2f} us + {b * 1e9:.1f} ns per point (linear fit over n_ctrl)")
-        t = np.array([r["step"] for r in results])
-        b, a = np.polyfit(ns_, t, 1)
-        print(f"- whole step: {a * 1e6:.1f} us fixed + {b * 1e9:.0f} ns per point per step "
-              f"(= {b * 1e9 / S:.0f} ns per point per stage)")
+        fixed = 0.0
+        for key, k in (("action_kernel", S), ("rates_into", S), ("rotation_angle_kernel", 1)):
+            fixed += k * np.polyfit(ns_, np.array([r["kt"][key] for r in results]), 1)[1]
+        print(f"- fixed per-call costs of the kernel calls of one step (4 action, 4 rates, 1 angle; each call "
+              f"unpacks sf/si in _views, with array reshapes): {fixed * 1e6:.1f} us per step")
+        for key, label in (("step", "fused step"), ("gen", "generic-loop step")):
+            t = np.array([r[key] for r in results])
+            b, a = np.polyfit(ns_, t, 1)
+            print(f"- {label}: {a * 1e6:.1f} us fixed + {b * 1e9:.0f} ns per point per step "
+                  f"(= {b * 1e9 / S:.0f} ns per point per stage)")
     # bytes per point (float64): action reads u (12), c v w (9), R (9), K K_s (6), 3 W band values,
     # writes 24; rates reads c v w (9), R (9), K K_s (6), u[1] (3), 3 W band, geo (9), LU row (7),
     # writes x (12) and out (12)
@@ -1122,22 +1396,22 @@ def main(args):
           f"(~{(act + rat) / results[0]['tot'].flops:.2f} B/flop).")
     for r in results:
         n = r["n"]
-        ws = 8 * n * (24 + 24 + 12 * (S + 2) + 3 * W + 7 + 9)  # y, y_r, K, u, out, band, LU, geo
-        print(f"- n_ctrl {n}: working set of one step ~{ws / 1024:.0f} KiB -> "
+        # advance_kernel: 3 states (24 each), stage rates K (12 S), u, zero, x (12 each), band, LU, geo
+        ws = 8 * n * (3 * 24 + 12 * (S + 3) + 3 * W + 7 + 9)
+        print(f"- n_ctrl {n}: working set of the fused loop ~{ws / 1024:.0f} KiB -> "
               f"{'L1d (48 KiB)' if ws < 44 * 1024 else ('L2 (2 MiB)' if ws < 1.8 * 2**20 else 'L3')}; "
-              f"{(act + rat) / ((r['kt']['action_kernel'] + r['kt']['rates_kernel']) / n * 1e9):.1f} GB/s "
+              f"{(act + rat) / ((r['kt']['action_kernel'] + r['kt']['rates_into']) / n * 1e9):.1f} GB/s "
               "while in the kernels")
     print()
     for n in ([31, 1001] if not args.quick else [31]):
-        pb = make_problem(n)
-        y = start_state(pb)
-        steps = max(20, int(20000 / n))
-        total, prow = cprofile_step(pb, y, dt_of(n), steps)
-        print(f"cProfile, n_ctrl {n}, {steps} steps (own time per function, share of the profiled total; "
-              f"cProfile inflates Python-call costs):\n")
-        print(md_table(["function", "calls/step", "own us/step", "share"],
-                       [[name, f"{nc / steps:.0f}", f"{tt / steps * 1e6:.1f}", f"{100 * tt / total:.0f}%"]
-                        for tt, nc, name in prow[:12]]))
+        m = models[n]
+        calls = 10
+        total, prow = cprofile_fused(m["pb"], m["y"], m["dt"], m["N"], calls)
+        print(f"cProfile, n_ctrl {n}, {calls} fused integrate_fixed calls of {m['N']} steps (own time per function "
+              f"per call, share of the profiled total; cProfile inflates Python-call costs):\n")
+        print(md_table(["function", "calls per integrate_fixed call", "own us per call", "share"],
+                       [[name, f"{nc / calls:.3g}", f"{tt / calls * 1e6:.1f}", f"{100 * tt / total:.1f}%"]
+                        for tt, nc, name in prow[:8]]))
         print()
     if args.pyspy:
         pyspy_section(args)
