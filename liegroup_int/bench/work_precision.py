@@ -175,9 +175,11 @@ def run_fixed(d: Discretized, method: str, dt: float, t_end: float, every: float
 
 
 def run_adaptive(d: Discretized, method: str, rtol: float, h_max: float, t_end: float, every: float,
-                 resolution: str) -> Run:
-    """One adaptive run of ours (``atol = 1e-3 rtol``, steps capped at ``h_max``)."""
+                 resolution: str, budget_s: float = math.inf) -> Run:
+    """One adaptive run of ours (``atol = 1e-3 rtol``, steps capped at ``h_max``); stopped
+    (status ``"skipped ..."``) once its step count implies more than ``budget_s`` CPU."""
     tab = resolve_method(method)
+    max_steps = 10_000_000 if not np.isfinite(budget_s) else max(1, int(budget_s / (tab.stages * d.stage_cost_s)))
     pb = d.problem
     rec_t, rec_tip = [], []
     t_out = every * np.arange(1, int(round(t_end / every)) + 1)
@@ -185,10 +187,12 @@ def run_adaptive(d: Discretized, method: str, rtol: float, h_max: float, t_end: 
     c0 = time.process_time()
     try:
         _, _, stats = integrate_adaptive(pb, tab, (0.0, t_end), pb.initial_state(), rtol=rtol, atol=1e-3 * rtol,
-                                         observer=_record(pb, rec_t, rec_tip), t_out=t_out, h_max=h_max)
+                                         observer=_record(pb, rec_t, rec_tip), t_out=t_out, h_max=h_max,
+                                         max_steps=max_steps)
         run.steps, run.rejected, run.rhs_evals = stats.steps, stats.rejected, stats.rhs_evals
     except IntegrationError as exc:
-        run.status = f"failed: {exc}"
+        over = "max_steps" in str(exc) and max_steps < 10_000_000
+        run.status = f"skipped (over {budget_s:g} s CPU budget at t={exc.t:.3g})" if over else f"failed: {exc}"
     run.cpu_s = time.process_time() - c0
     run.t, run.tip = np.array(rec_t), np.array(rec_tip).reshape(-1, 3)
     return run
@@ -375,7 +379,7 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
         h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
         for rtol in plan.rtols:
             add((m, "adaptive", p_t, n_t, rtol, h_max),
-                partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t), True)
+                partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
 
     # 3. peer
     peers: list[Run] = []
