@@ -56,7 +56,7 @@ class Plan:
     reference_y: float
     discretizations: tuple[tuple[int, int], ...]
     time_study: tuple[int, int] = (4, 31)
-    methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6")
+    methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65")
     dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
     adaptive: tuple[str, ...] = ("rkmk65",)
     rtols: tuple[float, ...] = (1e-5, 1e-7, 1e-9)
