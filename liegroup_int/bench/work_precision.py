@@ -465,7 +465,7 @@ def plot(result: Result, path: Path) -> Path:
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6.4))
     ok = [r for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
     families = sorted({r.family for r in result.ours})
-    colors = {f: plt.cm.viridis(i / max(1, len(families) - 1)) for i, f in enumerate(families)}
+    colors = {f: plt.cm.tab10(i % 10) for i, f in enumerate(families)}
     markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*h"))
     groups: dict[tuple[str, str], list[Run]] = {}
     for r in ok:
