@@ -28,6 +28,9 @@ def _parser() -> argparse.ArgumentParser:
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    val.add_argument("--spectrum", action="store_true",
+                     help="also compute the linearized spectrum at the initial state: largest |lambda|, largest "
+                          "Re lambda (growing modes), stable steps")
     for name, helptext in (("converge", "run a scene over values of one key and fit the convergence rate"),
                            ("sweep", "run a scene over a grid of key values")):
         st = sub.add_parser(name, help=helptext)
@@ -106,6 +109,33 @@ def _study(args) -> int:
     return 3 if failed else 0
 
 
+def _spectrum(scene) -> int:
+    """``validate --spectrum``: dense linearized spectrum at the initial state."""
+    from .integrators import growth_check, resolve_method, stable_step
+    from .scenes import KINDS
+
+    sim = KINDS[scene.kind].build(scene)
+    try:
+        rep = growth_check(sim.problem, 0.0, sim.y0, scene.t_end)
+    except ValueError as exc:
+        print(f"error: {scene.source}: {exc}", file=sys.stderr)
+        return 2
+    print(f"spectrum at t=0 ({rep.size} unknowns): |lambda|max = {rep.lam_max:.4g} 1/s, "
+          f"max Re lambda = {rep.max_real:.3g} 1/s (at |Im| = {rep.at_imag:.4g} 1/s)")
+    if rep.lam_max > 0:
+        for m in ("rkmk3", "rkmk4", "rkmk6", "rkmk65"):
+            st = stable_step(resolve_method(m), rep.lam_max, scene.t_end)
+            print(f"  stable dt {m:7s} {st.dt:.3g} s ({st.rule})")
+    if rep.growing:
+        print(f"warning: {scene.source}: a linearized mode grows like exp({rep.max_real:.3g} t) "
+              f"({rep.max_real * scene.t_end:.3g} e-folds over t_end = {scene.t_end:g} s). About a state at rest an "
+              "undamped structure has a purely imaginary spectrum, so such a mode is a spurious instability of the "
+              "discretization and the run will blow up whatever dt (docs/verification.md, 'Stability of the "
+              "semi-discretization'; for beams try another n_ctrl or material.kelvin_voigt); about a moving "
+              "state it may be the physical divergence of nearby trajectories", file=sys.stderr)
+    return 0
+
+
 def _bench(args) -> int:
     from dataclasses import replace
 
@@ -172,7 +202,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "validate":
             scene = _load(args)
             print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
-            return 0
+            return _spectrum(scene) if args.spectrum else 0
         if args.command == "run":
             from .runner import RunError, resume_run, run_scene
 

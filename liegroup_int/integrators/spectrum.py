@@ -9,6 +9,8 @@ every eigenvalue ``lambda``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .problem import Problem
@@ -68,3 +70,52 @@ def spectral_radius(problem: Problem, t: float, y, iterations: int = 200, seed: 
             break
         rho = rho_new
     return float(np.sqrt(rho))
+
+
+@dataclass(frozen=True)
+class GrowthReport:
+    """Largest real part of the linearized spectrum at a state.
+
+    Attributes
+    ----------
+    lam_max : float
+        Largest ``|lambda|`` [1/s].
+    max_real : float
+        Largest ``Re lambda`` [1/s].
+    at_imag : float
+        ``|Im lambda|`` of that eigenvalue.
+    growing : bool
+        ``max_real`` is above the finite-difference noise (``noise * lam_max``) and a mode
+        grows by more than ``e`` over the duration (``max_real * duration > 1``).
+    size : int
+        Number of unknowns (the Jacobian is ``size x size``).
+    """
+
+    lam_max: float
+    max_real: float
+    at_imag: float
+    growing: bool
+    size: int
+
+
+#: Largest increment size for which :func:`growth_check` forms the dense Jacobian.
+MAX_DENSE = 3000
+
+
+def growth_check(problem: Problem, t: float, y, duration: float, noise: float = 1e-6) -> GrowthReport:
+    """Dense eigenvalues of the linearized increment map at ``(t, y)``: does a mode grow?
+
+    An undamped structure has a purely imaginary spectrum; a collocation scheme need not
+    (docs/verification.md, "Stability of the semi-discretization"). Central differences
+    leave real parts of about ``1e-9 |lambda|max``; ``noise`` sets the level above which a
+    real part counts. Costs ``2 m`` rate evaluations and an ``m x m`` eigenvalue problem.
+    """
+    m = int(problem.zero_increment(y).size)
+    if m > MAX_DENSE:
+        raise ValueError(f"{m} unknowns: too many for a dense spectrum (at most {MAX_DENSE})")
+    lam = eigenvalues(problem, t, y)
+    k = int(np.argmax(lam.real))
+    lam_max = float(np.max(np.abs(lam)))
+    re = float(lam.real[k])
+    growing = re > noise * lam_max and re * duration > 1.0
+    return GrowthReport(lam_max, re, float(abs(lam.imag[k])), bool(growing), m)

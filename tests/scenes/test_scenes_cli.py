@@ -151,3 +151,17 @@ def test_converge_and_sweep_commands(tmp_path, capsys):
                "--set", "t_end=0.2", "--out", str(out2), "--serial"])
     assert rc == 0 and len((out2 / "study.csv").read_text().strip().splitlines()) == 5  # header + 4 runs
     assert main(["sweep", "heavy_top", "--grid", "integrator.dt=-1", "--out", str(tmp_path / "bad"), "--serial"]) == 2
+
+
+def test_validate_spectrum_flags_a_spurious_growing_mode(capsys):
+    # cantilever at rest: p = 4, n_ctrl = 31 has a purely imaginary spectrum (measured max
+    # Re lambda 2.8e-8 1/s, FD noise, at |lambda|max 2.4e6); p = 8, n_ctrl = 61 has a
+    # spurious growing mode of +1.3e4 1/s (docs/verification.md), 650 e-folds over 0.05 s
+    assert main(["validate", "cantilever", "--spectrum"]) == 0
+    out, err = capsys.readouterr()
+    assert "|lambda|max = 2.399e+06" in out and "stable dt rkmk4" in out and "warning" not in err
+    assert main(["validate", "cantilever", "--spectrum", "--set", "space.degree=8", "--set", "space.n_ctrl=61"]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith("warning:") and "spurious" in err and err.count("\n") == 1
+    growth = float(out.split("max Re lambda = ")[1].split()[0])
+    assert growth > 1e3
