@@ -94,8 +94,8 @@ class RigidBody:
         return np.concatenate((omega, torque / I), axis=-1)
 
     def problem(self) -> GroupProblem:
-        """The RKMK problem on ``SO3 x R3``."""
-        return GroupProblem(SPACE, self.vector_field)
+        """The RKMK problem on ``SO3 x R3`` (a :class:`RigidBodyProblem`)."""
+        return RigidBodyProblem(self)
 
     # -- diagnostics
     def energy(self, y: np.ndarray) -> np.ndarray:
@@ -136,6 +136,33 @@ class RigidBody:
             "casimir": lambda t, y: float(self.casimir(y)),
             "orth_error": lambda t, y: float(self.orth_error(y)),
         }
+
+
+class RigidBodyProblem(GroupProblem):
+    """``GroupProblem(SO3 x R3, body.vector_field)`` with a compiled fixed-step loop.
+
+    :meth:`compiled_stepper` returns a
+    :class:`~liegroup_int.problems.rigid_body_numba.FusedRigidBodyStepper` (numba) that
+    ``integrate_fixed`` uses between output times when no per-step monitor is given.
+    """
+
+    def __init__(self, body: RigidBody):
+        super().__init__(SPACE, body.vector_field)
+        self.body = body
+
+    def compiled_stepper(self, tab):
+        """The fused loop for ``tab``, or ``None`` (generic path) when it would not
+        reproduce this problem: numba missing, a subclass of this class or of
+        :class:`RigidBody` overriding the dynamics, or ``f``/``space`` replaced."""
+        cls = type(self.body)
+        if not (type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
+                and all(getattr(cls, k) is getattr(RigidBody, k) for k in ("vector_field", "_I", "_mgchi"))):
+            return None
+        try:
+            from .rigid_body_numba import FusedRigidBodyStepper
+        except ImportError:  # numba not installed
+            return None
+        return FusedRigidBodyStepper(self.body, tab)
 
 
 def axisymmetric_free_rotation(I1: float, I3: float, R0: np.ndarray, W0: np.ndarray, t: np.ndarray):
