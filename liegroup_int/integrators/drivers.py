@@ -199,6 +199,10 @@ def integrate_adaptive(
     ``max_increment_angle`` are rejected too (they would approach the 2 pi pole of
     dexpinv). Output times are hit exactly by shortening steps.
 
+    Without a ``monitor``, a problem's compiled adaptive loop
+    (:meth:`Problem.compiled_adaptive`, if it has one) runs all the attempts between
+    two output times in one call, with the same arithmetic, controller and limits.
+
     Returns
     -------
     (t_end, y_end, stats)
@@ -210,7 +214,10 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    K = _workspace(problem, tab, y0)
+    # duck-typed problems (no Problem base class) have no compiled loop
+    hook = getattr(problem, "compiled_adaptive", None)
+    stepper = hook(tab) if (hook is not None and monitor is None) else None
+    K = _workspace(problem, tab, y0) if stepper is None else None
     k = min(tab.order, tab.order_hat) + 1
     beta1, beta2 = 0.7 / k, 0.4 / k
     t, y = t0, y0
@@ -222,6 +229,21 @@ def integrate_adaptive(
     i_stop = 0
     while i_stop < len(stops):
         stop = stops[i_stop]
+        if stepper is not None:  # every attempt up to ``stop`` in one compiled call
+            res = stepper.advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps - stats.steps,
+                                     max_increment_angle, safety, fac_min, fac_max)
+            stats.accept_many(res.steps, res.h_min, res.h_max)
+            stats.rejected += res.rejected
+            stats.rhs_evals += tab.stages * res.attempts
+            t, y, h, err_prev = res.t, res.y, res.h, res.err_prev
+            if res.status == "max-steps":
+                raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
+            if res.status == "underflow":
+                raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
+            if observer is not None:
+                observer(t, y)
+            i_stop += 1
+            continue
         if stats.steps >= max_steps:
             raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
         land = t + h >= stop - 1e-12 * max(1.0, abs(stop))

@@ -58,6 +58,44 @@ class Advance:
     angle: float
 
 
+
+@dataclass(frozen=True)
+class AdaptiveAdvance:
+    """What a compiled adaptive loop reports back (see :meth:`Problem.compiled_adaptive`).
+
+    Attributes
+    ----------
+    y : state
+        State after the accepted steps.
+    t : float
+        Its time (the requested stop if ``status == "ok"``).
+    h : float
+        Next step to try (after the last accepted or rejected step); for
+        ``"underflow"`` the step that fell below the bound.
+    err_prev : float
+        Controller memory (error norm of the last accepted step, at least 1e-4).
+    steps, rejected, attempts : int
+        Accepted steps, rejected steps, and all steps tried (each costs one
+        evaluation per stage).
+    h_min, h_max : float
+        Smallest and largest accepted step (``inf``, ``0`` if none).
+    status : {"ok", "max-steps", "underflow"}
+        ``"ok"``: landed on the stop. ``"max-steps"``: the step budget ran out before
+        the next attempt. ``"underflow"``: a rejection shrank the step below
+        ``1e-14 max(1, |t|)``.
+    """
+
+    y: object
+    t: float
+    h: float
+    err_prev: float
+    steps: int
+    rejected: int
+    attempts: int
+    h_min: float
+    h_max: float
+    status: str
+
 class Problem(ABC):
     """Abstract RKMK problem. States ``y`` may be any object; increments are ndarrays."""
 
@@ -109,6 +147,21 @@ class Problem(ABC):
         stopping before the first step whose increment is non-finite or rotates by more
         than ``max_angle``. The fixed-step driver uses it when no per-step monitor is
         given. Default: ``None`` (the generic path).
+        """
+        return None
+
+    def compiled_adaptive(self, tab):
+        """An optional compiled adaptive loop for the embedded pair ``tab``, or ``None``.
+
+        It has ``advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left,
+        max_angle, safety, fac_min, fac_max) ->`` :class:`AdaptiveAdvance`, running the
+        accepted and rejected steps of
+        :func:`~liegroup_int.integrators.drivers.integrate_adaptive` from ``(t, y)`` until
+        it lands on the output time ``stop``, with the same step arithmetic
+        (:func:`~liegroup_int.integrators.rkmk.rkmk_step`, :meth:`end_step`), error
+        norm (:meth:`increment_scale`), rotation guard, controller, landing rule and
+        limits. The adaptive driver uses it when no per-step monitor is given.
+        Default: ``None`` (the generic path).
         """
         return None
 

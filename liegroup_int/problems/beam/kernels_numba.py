@@ -65,7 +65,7 @@ import numpy as np
 from numba import njit
 
 from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
-from ...integrators.problem import Advance
+from ...integrators.problem import AdaptiveAdvance, Advance
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
 #: Measured (cantilever p = 4, whole stage-rate kernel, best of 30 x 500 calls):
@@ -683,6 +683,26 @@ def _all_finite(x):
 
 
 @njit(cache=True, fastmath=False)
+def _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
+                    u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h):
+    """One RKMK step of size ``h`` from ``(t, y0)``: the stages of
+    :func:`liegroup_int.integrators.rkmk.compute_stages` into ``Kst`` (loads rewritten
+    into ``sf`` at every stage time; ``y1`` is the stage state), the combined increment
+    into ``u`` and ``y2 = end_step(Lambda(u, y0))`` (Newton-Schulz). ``y0`` is not written."""
+    s = b.shape[0]
+    _set_loads(sf, lpos, lvec, lprof, t)
+    rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0])
+    for r in range(1, s):
+        _combine(A[r], r, cc[r], Kf, h, uf)
+        action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
+        _set_loads(sf, lpos, lvec, lprof, t + cc[r] * h)
+        rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r])
+    _combine(b, s, 1.0, Kf, h, uf)
+    action_kernel(u, c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2, sf, si)
+    _newton_schulz(R2)
+
+
+@njit(cache=True, fastmath=False)
 def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
                    t_start, t_stop, dt, n_steps, max_angle):
     """Up to ``n_steps`` fixed RKMK steps from ``(t_start, y)``, in one compiled call.
@@ -723,16 +743,8 @@ def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
     for i in range(n_steps):
         t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
         h = t_next - t
-        _set_loads(sf, lpos, lvec, lprof, t)
-        rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0])
-        for r in range(1, s):
-            _combine(A[r], r, cc[r], Kf, h, uf)
-            action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
-            _set_loads(sf, lpos, lvec, lprof, t + cc[r] * h)
-            rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r])
-        _combine(b, s, 1.0, Kf, h, uf)
-        action_kernel(u, c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2, sf, si)
-        _newton_schulz(R2)
+        _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
+                        u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h)
         if not _all_finite(uf):
             return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan
         ang = rotation_angle_kernel(u, sf, si)
@@ -742,6 +754,146 @@ def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
         t = t_next
         h_min, h_max = min(h_min, h), max(h_max, h)
     return c0, v0, w0, R0, K0, Ks0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0
+
+
+# ====================================================================== fused adaptive loop
+# Status codes of :func:`adaptive_kernel` (the driver turns them into its exceptions).
+ADAPTIVE_OK, ADAPTIVE_MAX_STEPS, ADAPTIVE_UNDERFLOW = 0, 1, 2
+
+
+@njit(cache=True, fastmath=False)
+def _nan_max(a, b):
+    """``np.maximum(a, b)``: NaN if either is NaN."""
+    if a >= b or a != a:
+        return a
+    return b
+
+
+@njit(cache=True, fastmath=False)
+def _error_norm(errf, c0, c2, rtol, atol):
+    """:func:`liegroup_int.integrators.rkmk.error_norm` of the flat ``(4, n, 3)`` error
+    ``errf`` with ``BeamProblem.increment_scale``: ``max(|c0|, |c2|)`` on the position
+    component (the first ``3 n`` entries), ones elsewhere."""
+    n = c0.shape[0]
+    acc = 0.0
+    for i in range(n):
+        for d in range(3):
+            sc = _nan_max(abs(c0[i, d]), abs(c2[i, d]))
+            wv = errf[3 * i + d] / (atol + rtol * sc)
+            acc += wv * wv
+    one = atol + rtol * 1.0
+    for j in range(3 * n, errf.shape[0]):
+        wv = errf[j] / one
+        acc += wv * wv
+    return math.sqrt(acc / errf.shape[0])
+
+
+@njit(cache=True, fastmath=False)
+def _py_min(a, b):
+    """Python's ``min(a, b)`` (``a`` unless ``b < a``)."""
+    return b if b < a else a
+
+
+@njit(cache=True, fastmath=False)
+def _py_max(a, b):
+    """Python's ``max(a, b)`` (``a`` unless ``b > a``)."""
+    return b if b > a else a
+
+
+@njit(cache=True, fastmath=False)
+def _h_accepted(err, err_prev, h_try, h_max, safety, fac_min, fac_max, beta1, beta2):
+    """Next step after an accepted one (PI law of ``integrate_adaptive``): ``(h, err_prev)``."""
+    if err > 0:
+        fac = safety * err ** (-beta1) * err_prev ** beta2
+    else:
+        fac = fac_max
+    h = _py_min(h_max, h_try * _py_min(fac_max, _py_max(fac_min, fac)))
+    return h, _py_max(err, 1e-4)
+
+
+@njit(cache=True, fastmath=False)
+def _h_rejected(err, ang, h_try, max_angle, safety, fac_min, inv_k_neg):
+    """Retry step after a rejected one (``err`` already ``inf`` if it was not finite)."""
+    if math.isfinite(err):
+        fac = safety * err ** inv_k_neg if err > 0 else 1.0
+    else:
+        fac = fac_min
+    if ang > max_angle:
+        fac = _py_min(fac, 0.5 * max_angle / ang)
+    return h_try * _py_min(1.0, _py_max(fac_min, fac))
+
+
+@njit(cache=True, fastmath=False)
+def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
+                    t, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
+                    safety, fac_min, fac_max, beta1, beta2, inv_k_neg):
+    """Accepted and rejected embedded RKMK steps from ``(t, y)`` until landing on ``stop``,
+    in one compiled call: the loop body of
+    :func:`liegroup_int.integrators.drivers.integrate_adaptive` for one output time.
+
+    Per attempt: the ``max_steps`` check (``max_steps_left`` accepted steps remain), the
+    landing rule (``t + h >= stop - 1e-12 max(1, |stop|)`` -> ``h_try = stop - t``), one
+    step (:func:`_rkmk_step_into`), the embedded error ``h sum e_r k_r`` in the
+    cancellation-safe form, its RMS norm, the rotation angle of the increment; accept
+    if ``err <= 1`` and the angle is within ``max_angle``, then the PI controller
+    (:func:`_h_accepted`), else the rejection rule (:func:`_h_rejected`) and the
+    underflow check ``h < 1e-14 max(1, |t|)``.
+
+    Returns
+    -------
+    (c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status)
+        State and time reached (``stop`` if ``status`` is :data:`ADAPTIVE_OK`), the
+        controller state, the accepted and rejected steps and all attempts of this call,
+        the extreme accepted steps (``inf, 0`` if none), and the status
+        (:data:`ADAPTIVE_MAX_STEPS`, :data:`ADAPTIVE_UNDERFLOW`: ``h`` is the step that
+        underflowed).
+    """
+    n, s = c.shape[0], b.shape[0]
+    fixp, fixr = dirichlet_rows(sf, si)
+    x = np.empty((n, 12))
+    Kst = np.empty((s, 4, n, 3))
+    Kf = Kst.reshape((s, 12 * n))
+    u = np.empty((4, n, 3))
+    uf = u.reshape(12 * n)
+    errf = np.empty(12 * n)
+    zero = np.zeros((4, n, 3))
+    c0, v0, w0, R0, K0, Ks0 = c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy()
+    c1, v1, w1, R1, K1, Ks1 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
+        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    c2, v2, w2, R2, K2, Ks2 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
+        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    steps, rejected, attempts = 0, 0, 0
+    h_min_acc, h_max_acc = np.inf, 0.0
+    land_tol = 1e-12 * max(1.0, abs(stop))
+    while True:
+        if steps >= max_steps_left:
+            return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
+                    h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS)
+        land = t + h >= stop - land_tol
+        h_try = stop - t if land else h
+        _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
+                        u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h_try)
+        attempts += 1
+        _combine(e, s, 0.0, Kf, h_try, errf)
+        err = _error_norm(errf, c0, c2, rtol, atol)
+        ang = rotation_angle_kernel(u, sf, si)
+        if not math.isfinite(err):
+            err = np.inf
+        if err <= 1.0 and ang <= max_angle:
+            t = stop if land else t + h_try
+            c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
+            steps += 1
+            h_min_acc, h_max_acc = _py_min(h_min_acc, h_try), _py_max(h_max_acc, h_try)
+            h, err_prev = _h_accepted(err, err_prev, h_try, h_max, safety, fac_min, fac_max, beta1, beta2)
+            if land:
+                return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
+                        h_min_acc, h_max_acc, ADAPTIVE_OK)
+        else:
+            rejected += 1
+            h = _h_rejected(err, ang, h_try, max_angle, safety, fac_min, inv_k_neg)
+            if h < 1e-14 * max(1.0, abs(t)):
+                return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
+                        h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW)
 
 
 # ====================================================================== Python side
@@ -952,6 +1104,17 @@ class NumbaBeamKernels:
         return FusedBeamStepper(self, tab, state_cls, rows)
 
 
+    def adaptive(self, tab, state_cls):
+        """The fused adaptive loop for the embedded pair ``tab``
+        (:class:`FusedBeamAdaptive`), or ``None`` (no embedded pair, or a load profile
+        that cannot be evaluated inside the compiled loop)."""
+        if tab.e_f is None:
+            return None
+        rows = [profile_row(prof) for _, _, prof in self._profiles]
+        if any(r is None for r in rows):
+            return None
+        return FusedBeamAdaptive(self, tab, state_cls, rows)
+
 def profile_row(prof) -> np.ndarray | None:
     """Encode a :class:`~liegroup_int.problems.beam.model.Profile` for :func:`profile_value`.
 
@@ -1039,3 +1202,58 @@ class FusedBeamStepper:
         status = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}[status]
         return Advance(self.state_cls(c, v, w, R, K, Ks), float(t), int(steps), float(h_min), float(h_max),
                        status, float(t_fail), float(ang))
+
+
+class FusedBeamAdaptive(FusedBeamStepper):
+    """Adaptive embedded RKMK for one beam problem and pair, all attempts between two
+    output times per compiled call (:func:`adaptive_kernel`).
+
+    What :func:`liegroup_int.integrators.drivers.integrate_adaptive` uses (through
+    ``BeamProblem.compiled_adaptive``) when no per-step monitor is given. Parameters as
+    :class:`FusedBeamStepper`; ``tab`` must have error weights ``e_f``.
+    """
+
+    _STATUS = {ADAPTIVE_OK: "ok", ADAPTIVE_MAX_STEPS: "max-steps", ADAPTIVE_UNDERFLOW: "underflow"}
+
+    def __init__(self, kernels, tab, state_cls, rows):
+        super().__init__(kernels, tab, state_cls, rows)
+        self.e = np.ascontiguousarray(tab.e_f, dtype=float)
+        k = min(tab.order, tab.order_hat) + 1
+        # the exponents exactly as integrate_adaptive forms them
+        self.beta1, self.beta2, self.inv_k_neg = 0.7 / k, 0.4 / k, -1.0 / k
+
+    def advance_to(self, t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
+                   safety=0.9, fac_min=0.2, fac_max=5.0):
+        """Accepted and rejected steps from ``(t, y)`` until landing on ``stop``.
+
+        Parameters
+        ----------
+        t : float
+        y : BeamState
+            Start state (not modified).
+        stop : float
+            Output time to land on.
+        h, err_prev : float
+            Controller state (step to try next, error of the last accepted step).
+        rtol, atol : float
+        h_max : float
+            Cap on the step.
+        max_steps_left : int
+            Accepted steps still allowed.
+        max_angle : float
+            Rotation guard (larger increments are rejected).
+        safety, fac_min, fac_max : float
+            Controller constants of ``integrate_adaptive``.
+
+        Returns
+        -------
+        liegroup_int.integrators.problem.AdaptiveAdvance
+        """
+        arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
+        out = adaptive_kernel(*arr, self.sf, self.si, self.A, self.b, self.c, self.e, self.lpos, self.lvec,
+                              self.lprof, float(t), float(stop), float(h), float(err_prev), float(rtol),
+                              float(atol), float(h_max), int(max_steps_left), float(max_angle), float(safety),
+                              float(fac_min), float(fac_max), self.beta1, self.beta2, self.inv_k_neg)
+        c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status = out
+        return AdaptiveAdvance(self.state_cls(c, v, w, R, K, Ks), float(t), float(h), float(err_prev), int(steps),
+                               int(rejected), int(attempts), float(h_min), float(h_max_acc), self._STATUS[status])

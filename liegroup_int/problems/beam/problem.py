@@ -259,6 +259,15 @@ class BeamProblem(Problem):
             return None
         return self._nb.stepper(tab, BeamState)
 
+    def compiled_adaptive(self, tab):
+        """Fused adaptive loop (backend="numba" only): every attempt between two output
+        times of ``integrate_adaptive`` in one compiled call
+        (:class:`.kernels_numba.FusedBeamAdaptive`). ``None`` as for
+        :meth:`compiled_stepper`, and for tableaux without an embedded pair."""
+        if self._nb is None:
+            return None
+        return self._nb.adaptive(tab, BeamState)
+
     # ------------------------------------------------------------------ stage kernels
     def _solve(self, rhs: np.ndarray) -> np.ndarray:
         """Dirichlet rows, then one ``M_c`` solve for all 12 columns -> ``(4, n, 3)``."""
