@@ -563,10 +563,13 @@ def asm_crosscheck(nb, y, rows):
             model[(kern, kind)] = model[(kern, kind)] + ops
     res = {}
     for fname, flines in asm_functions(text).items():
-        if fname.startswith("_ZN7cpython") or fname.startswith("cfunc.") or "kernels_numba" not in fname:
+        if fname.startswith("_ZN7cpython") or fname.startswith("cfunc."):
             continue
-        m = re.search(r"kernels_numba(\d+)", fname)  # Itanium mangling: <length><name>
-        res[fname[m.end():m.end() + int(m.group(1))]] = loop_report(flines)
+        m = re.search(r"kernels_numba(\d+)", fname) or re.search(r"combine_numba(\d+)", fname)
+        if m is None:  # not one of the beam kernels or the shared combination
+            continue
+        name = fname[m.end():m.end() + int(m.group(1))]  # Itanium mangling: <length><name>
+        res["_combine" if name == "combine_into" else name] = loop_report(flines)
 
     def fmt(o):
         s = f"{o.mul} mul, {o.add} add/sub"

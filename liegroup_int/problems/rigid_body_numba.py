@@ -38,6 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
+from ..integrators.combine_numba import combine_into as _combine
 from ..integrators.problem import Advance
 
 ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
@@ -141,24 +142,6 @@ def _rate(y, u, prm, ser, out):
     out[3] = tq0 / I0
     out[4] = tq1 / I1
     out[5] = tq2 / I2
-
-
-@njit(cache=True, fastmath=False)
-def _combine(wts, m, total, K, h, out):
-    """``out = h sum_{l < m} wts[l] K[l]`` in the form of ``rkmk.combine``:
-    ``h (sum_{l >= 1} wts[l] (K[l] - K[0]) + total K[0])``; ``m = 1``: ``h (wts[0] K[0])``."""
-    if m == 1:
-        w0 = wts[0]
-        for j in range(out.shape[0]):
-            out[j] = h * (w0 * K[0, j])
-        return
-    for j in range(out.shape[0]):
-        k0 = K[0, j]
-        acc = wts[1] * (K[1, j] - k0)
-        for l in range(2, m):
-            acc += wts[l] * (K[l, j] - k0)
-        acc += total * k0
-        out[j] = acc * h
 
 
 @njit(cache=True, fastmath=False)

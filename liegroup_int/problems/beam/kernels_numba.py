@@ -65,6 +65,7 @@ import numpy as np
 from numba import njit
 
 from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
+from ...integrators.combine_numba import combine_into as _combine
 from ...integrators.problem import AdaptiveAdvance, Advance
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
@@ -631,26 +632,6 @@ def _set_loads(sf, lpos, lvec, lprof, t):
         f = profile_value(lprof[k], t)
         for d in range(3):
             sf[lpos[k] + d] = lvec[k, d] * f
-
-
-@njit(cache=True, fastmath=False)
-def _combine(wts, m, total, Kf, h, out):
-    """``out = h sum_{l < m} wts[l] Kf[l]`` in the cancellation-safe form of
-    :func:`liegroup_int.integrators.rkmk.combine` (``total = sum(wts[:m])``):
-    ``h (sum_{l >= 1} wts[l] (Kf[l] - Kf[0]) + total Kf[0])``; ``m = 1``: ``h (wts[0] Kf[0])``.
-    ``Kf`` is the flat ``(stages, 12 n)`` view of the stage rates, ``out`` flat too."""
-    if m == 1:
-        w0 = wts[0]
-        for j in range(out.shape[0]):
-            out[j] = h * (w0 * Kf[0, j])
-        return
-    for j in range(out.shape[0]):
-        k0 = Kf[0, j]
-        acc = wts[1] * (Kf[1, j] - k0)
-        for l in range(2, m):
-            acc += wts[l] * (Kf[l, j] - k0)
-        acc += total * k0
-        out[j] = acc * h
 
 
 @njit(cache=True, fastmath=False)
