@@ -664,6 +664,20 @@ def _all_finite(x):
 
 
 @njit(cache=True, fastmath=False)
+def _step_workspace(c, v, w, R, K, Ks, s):
+    """Work arrays of a fused step loop, allocated once per call: the ``(n, 12)`` solve
+    buffer, ``s`` stage rates, the increment, a zero increment, a copy of the start state
+    and two spare states (stage state, next state)."""
+    n = c.shape[0]
+    st0 = (c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy())
+    st1 = (np.empty_like(c), np.empty_like(v), np.empty_like(w), np.empty_like(R), np.empty_like(K),
+           np.empty_like(Ks))
+    st2 = (np.empty_like(c), np.empty_like(v), np.empty_like(w), np.empty_like(R), np.empty_like(K),
+           np.empty_like(Ks))
+    return np.empty((n, 12)), np.empty((s, 4, n, 3)), np.empty((4, n, 3)), np.zeros((4, n, 3)), st0, st1, st2
+
+
+@njit(cache=True, fastmath=False)
 def _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
                     u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h):
     """One RKMK step of size ``h`` from ``(t, y0)``: the stages of
@@ -709,17 +723,12 @@ def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
     """
     n, s = c.shape[0], b.shape[0]
     fixp, fixr = dirichlet_rows(sf, si)
-    x = np.empty((n, 12))
-    Kst = np.empty((s, 4, n, 3))
+    x, Kst, u, zero, st0, st1, st2 = _step_workspace(c, v, w, R, K, Ks, s)
     Kf = Kst.reshape((s, 12 * n))
-    u = np.empty((4, n, 3))
     uf = u.reshape(12 * n)
-    zero = np.zeros((4, n, 3))
-    c0, v0, w0, R0, K0, Ks0 = c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy()
-    c1, v1, w1, R1, K1, Ks1 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
-        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
-    c2, v2, w2, R2, K2, Ks2 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
-        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    c0, v0, w0, R0, K0, Ks0 = st0
+    c1, v1, w1, R1, K1, Ks1 = st1
+    c2, v2, w2, R2, K2, Ks2 = st2
     t, h_min, h_max = t_start, np.inf, 0.0
     for i in range(n_steps):
         t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
@@ -831,18 +840,13 @@ def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
     """
     n, s = c.shape[0], b.shape[0]
     fixp, fixr = dirichlet_rows(sf, si)
-    x = np.empty((n, 12))
-    Kst = np.empty((s, 4, n, 3))
+    x, Kst, u, zero, st0, st1, st2 = _step_workspace(c, v, w, R, K, Ks, s)
     Kf = Kst.reshape((s, 12 * n))
-    u = np.empty((4, n, 3))
     uf = u.reshape(12 * n)
     errf = np.empty(12 * n)
-    zero = np.zeros((4, n, 3))
-    c0, v0, w0, R0, K0, Ks0 = c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy()
-    c1, v1, w1, R1, K1, Ks1 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
-        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
-    c2, v2, w2, R2, K2, Ks2 = np.empty_like(c0), np.empty_like(v0), np.empty_like(w0), \
-        np.empty_like(R0), np.empty_like(K0), np.empty_like(Ks0)
+    c0, v0, w0, R0, K0, Ks0 = st0
+    c1, v1, w1, R1, K1, Ks1 = st1
+    c2, v2, w2, R2, K2, Ks2 = st2
     steps, rejected, attempts = 0, 0, 0
     h_min_acc, h_max_acc = np.inf, 0.0
     land_tol = 1e-12 * max(1.0, abs(stop))
