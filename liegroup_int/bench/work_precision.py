@@ -319,6 +319,34 @@ def _describe(r: Run) -> str:
     return f"{head}: {r.steps} steps, {r.cpu_s:.2f} s CPU{err}{' (cached)' if r.cached else ''}"
 
 
+def _peer_runs(plan: Plan, cached: Callable, ref: Run, log: Callable | None) -> tuple[list[Run], str | None, str | None]:
+    """PyElastica at every element count of the plan (and its discretization of our model
+    at the finest, if asked): ``(runs, PyElastica version, note)``; no runs and a note when
+    PyElastica is missing or has no set-up for the scene."""
+    try:
+        from . import pyelastica_peer as P
+    except ImportError as exc:
+        note = f"PyElastica not available ({exc}); install the peers extra: pip install -e \".[peers]\""
+        _say(log, note)
+        return [], None, note
+    case = peer_case(Path(plan.scene).stem)
+    if case is None:
+        note = f"no PyElastica set-up for scene {plan.scene!r} (pendulum and cantilever only)"
+        _say(log, note)
+        return [], P.VERSION, note
+    P.warm_up()
+    models = [("pyelastica", n) for n in plan.peer_elements]
+    if plan.peer_linear:
+        models.append(("linear", plan.peer_elements[-1]))
+    peers = []
+    for model, n in models:
+        r = cached(("peer", model, n), partial(run_peer, case, n, plan.t_end, plan.every, model))
+        r.error = tip_error(r, ref)
+        peers.append(r)
+        _say(log, _describe(r))
+    return peers, P.VERSION, None
+
+
 def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", peer: bool = True,
                    fresh: bool = False, log: Callable | None = print) -> Result:
     """Run a plan (module doc). ``out/runs`` caches finished runs unless ``out`` is None."""
@@ -372,7 +400,7 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     d_t = disc(p_t, n_t)
     y_t = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_t.lam_max, plan.t_end).y)
     dt_t = fit_step(y_t / d_t.lam_max, plan.every)
-    tref = cached(("ref", p_t, n_t, dt_t), lambda: run_fixed(d_t, "rkmk6", dt_t, plan.t_end, plan.every, res_t))
+    tref = cached(("ref", p_t, n_t, dt_t), partial(run_fixed, d_t, "rkmk6", dt_t, plan.t_end, plan.every, res_t))
     if tref.status != "ok":
         raise RuntimeError(f"bench {plan.scene}: the time-study reference ({res_t}) failed: {tref.status}")
     tref.error = tip_error(tref, ref)
@@ -406,31 +434,7 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
                 partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
 
     # 3. peer
-    peers: list[Run] = []
-    version = note = None
-    if peer and plan.peer_elements:
-        try:
-            from . import pyelastica_peer as P
-        except ImportError as exc:
-            note = f"PyElastica not available ({exc}); install the peers extra: pip install -e \".[peers]\""
-            _say(log, note)
-        else:
-            version = P.VERSION
-            case = peer_case(Path(plan.scene).stem)
-            if case is None:
-                note = f"no PyElastica set-up for scene {plan.scene!r} (pendulum and cantilever only)"
-                _say(log, note)
-            else:
-                P.warm_up()
-                counts = list(plan.peer_elements)
-                models = [("pyelastica", n) for n in counts]
-                if plan.peer_linear:
-                    models.append(("linear", counts[-1]))
-                for model, n in models:
-                    r = cached(("peer", model, n), partial(run_peer, case, n, plan.t_end, plan.every, model))
-                    r.error = tip_error(r, ref)
-                    peers.append(r)
-                    _say(log, _describe(r))
+    peers, version, note = _peer_runs(plan, cached, ref, log) if peer and plan.peer_elements else ([], None, None)
     lam = {f"p{p} n{n}": (d.lam_max, d.max_real) for (p, n), d in built.items()}
     mine = list(ours.values())
     return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note)
