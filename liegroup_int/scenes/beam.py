@@ -57,6 +57,9 @@ KEYS = {
         Key("integrator.backend", "str", "numba", "stage kernels: compiled (numba) or plain NumPy",
             choices=("numba", "numpy")),
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
+        Key("space.formulation", "str", "primal",
+            "balance laws: the paper's primal collocation, or the locking-free mixed one (resultant splines)",
+            choices=("primal", "mixed")),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
@@ -211,7 +214,7 @@ def problem(scene: Scene) -> BeamProblem:
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     try:
         return BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"],
-                           kelvin_voigt=scene["material.kelvin_voigt"])
+                           kelvin_voigt=scene["material.kelvin_voigt"], formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
 
@@ -277,7 +280,8 @@ def build(scene: Scene) -> Simulation:
         info.update(auto_step(scene, pb, y0))
     info = {
         **info,
-        "discretization": {"degree": scene["space.degree"], "n_ctrl": scene["space.n_ctrl"],
+        "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
+                           "n_ctrl": scene["space.n_ctrl"],
                            "length": pb.space.length, "C_star": 4.0,
                            "kelvin_voigt": pb.tau},
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},

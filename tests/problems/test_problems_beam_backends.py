@@ -34,10 +34,11 @@ TOL_STEPS = 1e-11
 TIMES = (0.0, 0.1)  # 0.1 s: every time profile of the built-in scenes is switched on
 
 
-def _pair(name):
-    sc = load_scene(name, {"integrator.backend": "numpy"})
+def _pair(name, formulation="primal"):
+    sc = load_scene(name, {"integrator.backend": "numpy", "space.formulation": formulation})
     pb = problem(sc)
-    nb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numba")
+    nb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numba",
+                     formulation=formulation)
     return sc, pb, nb
 
 
@@ -80,9 +81,11 @@ def _assert_close(got, ref, scale, tol, what):
     assert err <= tol * scale, f"{what}: |numba - numpy| = {err:.3e} > {tol:g} * scale {scale:.3e}"
 
 
-@pytest.fixture(scope="module", params=BEAM_SCENES)
+@pytest.fixture(scope="module", params=[(s, f) for f in ("primal", "mixed") for s in BEAM_SCENES],
+                ids=lambda p: f"{p[0]}-{p[1]}")
 def scene_pair(request):
-    return (request.param,) + _pair(request.param)
+    name, formulation = request.param
+    return (f"{name} ({formulation})",) + _pair(name, formulation)
 
 
 def test_increment_rate_agrees(scene_pair):

@@ -33,8 +33,8 @@ def _no_monitor(t, y, stats):
     """Any monitor keeps the driver on its generic loop."""
 
 
-def _scene(name, backend="numba"):
-    sc = load_scene(name, {"integrator.backend": backend})
+def _scene(name, backend="numba", formulation="primal"):
+    sc = load_scene(name, {"integrator.backend": backend, "space.formulation": formulation})
     dt = sc.integrator.dt if isinstance(sc.integrator.dt, float) else 1e-5  # rollup: dt = "auto"
     return problem(sc), dt
 
@@ -66,16 +66,19 @@ def _same_stats(a, b):
     assert da == db
 
 
-@pytest.fixture(scope="module", params=BEAM_SCENES)
+@pytest.fixture(scope="module", params=[(s, f) for f in ("primal", "mixed") for s in BEAM_SCENES],
+                ids=lambda p: f"{p[0]}-{p[1]}")
 def scene(request):
-    pb, dt = _scene(request.param)
-    return request.param, pb, dt
+    name, formulation = request.param
+    pb, dt = _scene(name, formulation=formulation)
+    return f"{name} ({formulation})", pb, dt
 
 
 def test_the_stepper_exists_only_where_it_should(scene):
     _, pb, _ = scene
     assert pb.compiled_stepper(TAB) is not None
-    np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy")
+    np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy",
+                        formulation=pb.formulation)
     assert np_pb.compiled_stepper(TAB) is None
 
 

@@ -36,8 +36,8 @@ def _no_monitor(t, y, stats):
     """Any monitor keeps the driver on its generic loop."""
 
 
-def _scene(name):
-    sc = load_scene(name, {"integrator.backend": "numba"})
+def _scene(name, formulation="primal"):
+    sc = load_scene(name, {"integrator.backend": "numba", "space.formulation": formulation})
     dt = sc.integrator.dt if isinstance(sc.integrator.dt, float) else 1e-5  # rollup: dt = "auto"
     return problem(sc), dt
 
@@ -117,9 +117,10 @@ def _assert_bitwise(a, b):
 
 @pytest.mark.parametrize("method", PAIRS)
 @pytest.mark.parametrize("name", BEAM_SCENES)
-def test_same_steps_as_the_generic_loop_in_the_same_summation_order(name, method, sequential_sums,
+@pytest.mark.parametrize("formulation", ["primal", "mixed"])
+def test_same_steps_as_the_generic_loop_in_the_same_summation_order(name, method, formulation, sequential_sums,
                                                                     adaptive_calls):
-    pb, dt = _scene(name)
+    pb, dt = _scene(name, formulation)
     sequential_sums(pb)
     y0 = pb.initial_state()
     snapshot = y0.copy()

@@ -82,7 +82,13 @@ _IA, _IB, _IC, _ID, _IB1, _IC1 = range(6)
 # ---- layout of the int array ``si`` (header) -----------------------------------------
 _H_N, _H_W, _H_L, _H_U, _H_DENSE, _H_NE = 0, 1, 2, 3, 4, 5
 _H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0, _H_NT = range(6, 16)
-_HEADER = 16
+_H_FORM = 16  # formulation: FORM_PRIMAL or FORM_MIXED
+_HEADER = 17
+FORM_PRIMAL, FORM_MIXED = 0, 1
+#: Columns of the stage work array ``x``: 12 right-hand sides, then (mixed only) the
+#: resultant values n, m (6, solved in place into their control values), R^T c_s (3),
+#: N (3), M (3) per point, and 6 scratch columns for the dense fallback solve.
+_X_RHS, _X_NM, _X_RC, _X_N, _X_M, _X_TMP, X_COLS = 0, 12, 18, 21, 24, 27, 33
 # (everything that may change outside this file - series length and coefficients, the
 # threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
@@ -145,6 +151,23 @@ def _coef_ABCB1C1(t, ser, thr):
     sh = math.sin(0.5 * t) / t
     return (s / t, 2.0 * sh * sh, (t - s) / t ** 3.0,
             (t * s + 2.0 * co - 2.0) / t ** 4.0, (3.0 * s - 2.0 * t - t * co) / t ** 5.0)
+
+
+@njit(cache=True, fastmath=_FM, inline="always")
+def _coef_ABC(t, ser, thr):
+    """``(A, B, C)`` at the angle ``t`` (what the mixed action needs; same branches)."""
+    if t < thr:
+        t2 = t * t
+        m = _n_terms(t2, ser.shape[1])
+        a, b, c = ser[_IA, m - 1], ser[_IB, m - 1], ser[_IC, m - 1]
+        for j in range(m - 2, -1, -1):
+            a = a * t2 + ser[_IA, j]
+            b = b * t2 + ser[_IB, j]
+            c = c * t2 + ser[_IC, j]
+        return a, b, c
+    s = math.sin(t)
+    sh = math.sin(0.5 * t) / t
+    return s / t, 2.0 * sh * sh, (t - s) / t ** 3.0
 
 
 @njit(cache=True, fastmath=_FM, inline="always")
@@ -248,6 +271,46 @@ def _finish_solve(x, lu, lower, upper, minv, dense, forward_done, out):
             out[f, i, 2] = x[i, 3 * f + 2]
 
 
+@njit(cache=True, fastmath=False, inline="always")
+def _forward_row_cols(x, i, lu, lower, q0, q1):
+    """Row ``i`` of the unit-lower sweep on columns ``q0:q1`` of ``x``."""
+    for j in range(max(0, i - lower), i):
+        m = lu[i, lower + j - i]
+        if m != 0.0:
+            for q in range(q0, q1):
+                x[i, q] -= m * x[j, q]
+
+
+@njit(cache=True, fastmath=False)
+def _solve_cols(x, lu, lower, upper, minv, dense, forward_done, q0, q1, tmp):
+    """``x[:, q0:q1] <- M_c^-1 x[:, q0:q1]`` in place (banded sweeps, or the dense
+    inverse through the scratch columns starting at ``tmp``)."""
+    n = x.shape[0]
+    if dense:
+        for i in range(n):
+            for q in range(q0, q1):
+                acc = 0.0
+                for j in range(n):
+                    acc += minv[i, j] * x[j, q]
+                x[i, tmp + q - q0] = acc
+        for i in range(n):
+            for q in range(q0, q1):
+                x[i, q] = x[i, tmp + q - q0]
+        return
+    if not forward_done:
+        for i in range(1, n):
+            _forward_row_cols(x, i, lu, lower, q0, q1)
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, min(n, i + upper + 1)):
+            m = lu[i, lower + j - i]
+            if m != 0.0:
+                for q in range(q0, q1):
+                    x[i, q] -= m * x[j, q]
+        r = lu[i, lower]
+        for q in range(q0, q1):
+            x[i, q] *= r
+
+
 @njit(cache=True, fastmath=False)
 def solve_kernel(x, sf, si):
     """``M_c^-1`` on an increment-shaped array ``x`` ``(4, n, 3)``, in place."""
@@ -268,7 +331,7 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W = c.shape[0], band.shape[2]
     thr = prm[_P_THR]
-    tau = prm[_P_TAU]
+    mixed = si[_H_FORM] == FORM_MIXED
     for i in range(n):
         for d in range(3):
             c2[i, d] = c[i, d] + u[0, i, d]
@@ -277,21 +340,34 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
         # theta and its s-derivatives at the collocation point
         t0 = t1 = t2 = s0 = s1 = s2 = q0 = q1 = q2 = 0.0
         js = j0[i]
-        for k in range(W):
-            j = js + k
-            b0, b1, b2 = band[0, i, k], band[1, i, k], band[2, i, k]
-            x0, x1, x2 = u[1, j, 0], u[1, j, 1], u[1, j, 2]
-            t0 += b0 * x0
-            t1 += b0 * x1
-            t2 += b0 * x2
-            s0 += b1 * x0
-            s1 += b1 * x1
-            s2 += b1 * x2
-            q0 += b2 * x0
-            q1 += b2 * x1
-            q2 += b2 * x2
-        ang = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
-        cA, cB, cC, cB1, cC1 = _coef_ABCB1C1(ang, ser, thr)
+        if mixed:  # K_s is not read by the mixed formulation: no theta_ss, B1, C1
+            for k in range(W):
+                j = js + k
+                b0, b1 = band[0, i, k], band[1, i, k]
+                x0, x1, x2 = u[1, j, 0], u[1, j, 1], u[1, j, 2]
+                t0 += b0 * x0
+                t1 += b0 * x1
+                t2 += b0 * x2
+                s0 += b1 * x0
+                s1 += b1 * x1
+                s2 += b1 * x2
+            cA, cB, cC = _coef_ABC(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
+            cB1 = cC1 = 0.0
+        else:
+            for k in range(W):
+                j = js + k
+                b0, b1, b2 = band[0, i, k], band[1, i, k], band[2, i, k]
+                x0, x1, x2 = u[1, j, 0], u[1, j, 1], u[1, j, 2]
+                t0 += b0 * x0
+                t1 += b0 * x1
+                t2 += b0 * x2
+                s0 += b1 * x0
+                s1 += b1 * x1
+                s2 += b1 * x2
+                q0 += b2 * x0
+                q1 += b2 * x1
+                q2 += b2 * x2
+            cA, cB, cC, cB1, cC1 = _coef_ABCB1C1(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
         # exp(hat(theta)) = I + A X + B X X
         xx, yy, zz = t0, t1, t2
         e00 = 1.0 + cB * (-zz * zz - yy * yy)
@@ -316,30 +392,33 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
         R2[i, 2, 1] = e20 * r01 + e21 * r11 + e22 * r21
         R2[i, 2, 2] = e20 * r02 + e21 * r12 + e22 * r22
         # g = J_r(theta) theta_s and g_s = d/ds g (kinematics.jr_and_derivative)
-        tt = t0 * s0 + t1 * s1 + t2 * s2
         tg0, tg1, tg2 = _cross(t0, t1, t2, s0, s1, s2)
         ttg0, ttg1, ttg2 = _cross(t0, t1, t2, tg0, tg1, tg2)
-        ts0, ts1, ts2 = _cross(t0, t1, t2, q0, q1, q2)
-        a0, a1, a2 = _cross(s0, s1, s2, tg0, tg1, tg2)
-        b0_, b1_, b2_ = _cross(t0, t1, t2, ts0, ts1, ts2)
         g0 = s0 - cB * tg0 + cC * ttg0
         g1 = s1 - cB * tg1 + cC * ttg1
         g2 = s2 - cB * tg2 + cC * ttg2
+        x0 = r00 * g0 + r10 * g1 + r20 * g2
+        x1 = r01 * g0 + r11 * g1 + r21 * g2
+        x2 = r02 * g0 + r12 * g1 + r22 * g2
+        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
+        K2[i, 0] = k0 + x0
+        K2[i, 1] = k1 + x1
+        K2[i, 2] = k2 + x2
+        if mixed:
+            Ks2[i, 0], Ks2[i, 1], Ks2[i, 2] = Ks[i, 0], Ks[i, 1], Ks[i, 2]
+            continue
+        tt = t0 * s0 + t1 * s1 + t2 * s2
+        ts0, ts1, ts2 = _cross(t0, t1, t2, q0, q1, q2)
+        a0, a1, a2 = _cross(s0, s1, s2, tg0, tg1, tg2)
+        b0_, b1_, b2_ = _cross(t0, t1, t2, ts0, ts1, ts2)
         h0 = q0 - cB1 * tt * tg0 - cB * ts0 + cC1 * tt * ttg0 + cC * (a0 + b0_)
         h1 = q1 - cB1 * tt * tg1 - cB * ts1 + cC1 * tt * ttg1 + cC * (a1 + b1_)
         h2 = q2 - cB1 * tt * tg2 - cB * ts2 + cC1 * tt * ttg2 + cC * (a2 + b2_)
         # x = R^T g, x_s = R^T g_s (old R); K' = K + x, K_s' = K_s - K x x + x_s
-        x0 = r00 * g0 + r10 * g1 + r20 * g2
-        x1 = r01 * g0 + r11 * g1 + r21 * g2
-        x2 = r02 * g0 + r12 * g1 + r22 * g2
         y0 = r00 * h0 + r10 * h1 + r20 * h2
         y1 = r01 * h0 + r11 * h1 + r21 * h2
         y2 = r02 * h0 + r12 * h1 + r22 * h2
-        k0, k1, k2 = K[i, 0], K[i, 1], K[i, 2]
         kx0, kx1, kx2 = _cross(k0, k1, k2, x0, x1, x2)
-        K2[i, 0] = k0 + x0
-        K2[i, 1] = k1 + x1
-        K2[i, 2] = k2 + x2
         Ks2[i, 0] = Ks[i, 0] - kx0 + y0
         Ks2[i, 1] = Ks[i, 1] - kx1 + y1
         Ks2[i, 2] = Ks[i, 2] - kx2 + y2
@@ -370,14 +449,17 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
     ``dexpinv``); pass zeros for the plain vector field.
     """
     fixp, fixr = dirichlet_rows(sf, si)
-    x = np.empty((c.shape[0], 12))
+    x = np.empty((c.shape[0], X_COLS))
     rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out)
 
 
 @njit(cache=True, fastmath=_FM)
 def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
     """:func:`rates_kernel` without allocation: ``fixp, fixr`` from :func:`dirichlet_rows`,
-    ``x`` an ``(n, 12)`` work array (overwritten with the right-hand sides)."""
+    ``x`` an ``(n, X_COLS)`` work array (overwritten with the right-hand sides)."""
+    if si[_H_FORM] == FORM_MIXED:
+        rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out)
+        return
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
     lower, dense = si[_H_L], si[_H_DENSE] != 0
@@ -548,6 +630,170 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
     _finish_solve(x, lu, lower, si[_H_U], minv, dense, True, out)
 
 
+@njit(cache=True, fastmath=_FM)
+def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out):
+    """Stage rate of the mixed formulation (``BeamProblem._rates`` with
+    ``formulation="mixed"``) into ``out`` ``(4, n, 3)``; ``x`` is the ``(n, X_COLS)``
+    work array.
+
+    Pass 1, per point: ``R^T c_s``, strains (plus ``tau`` times their rates), material
+    resultants ``N, M`` and spatial ``n = R N, m = R M``, whose forward sweep through
+    ``M_c`` runs in the same loop; then the backward sweep gives the resultant control
+    values. Pass 2, per point: their s-derivatives ``N1 n_hat, N1 m_hat``, the balance
+    laws, enhanced collocation at Neumann ends, ``dexpinv``, Dirichlet rows, and the
+    forward sweep of the final solve.
+    """
+    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
+    n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
+    lower, upper, dense = si[_H_L], si[_H_U], si[_H_DENSE] != 0
+    CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
+    CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
+    J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
+    mu = prm[_P_MU]
+    qx, qy, qz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]
+    mx, my, mz = prm[_P_M], prm[_P_M + 1], prm[_P_M + 2]
+    has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
+    thr = prm[_P_THR]
+    tau = prm[_P_TAU]
+    # ---- pass 1: pointwise constitutive resultants
+    for i in range(n):
+        cs0 = cs1 = cs2 = 0.0
+        js = j0[i]
+        for k in range(W):
+            j = js + k
+            b1 = band[1, i, k]
+            cs0 += b1 * c[j, 0]
+            cs1 += b1 * c[j, 1]
+            cs2 += b1 * c[j, 2]
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        rc0 = r00 * cs0 + r10 * cs1 + r20 * cs2
+        rc1 = r01 * cs0 + r11 * cs1 + r21 * cs2
+        rc2 = r02 * cs0 + r12 * cs1 + r22 * cs2
+        ga0, ga1, ga2 = rc0 - geo[i, 0], rc1 - geo[i, 1], rc2 - geo[i, 2]
+        km0, km1, km2 = K[i, 0] - geo[i, 3], K[i, 1] - geo[i, 4], K[i, 2] - geo[i, 5]
+        if tau != 0.0:  # Kelvin-Voigt (kinematics.strain_rates): strains + tau * rates
+            vs0 = vs1 = vs2 = ws0 = ws1 = ws2 = wc0 = wc1 = wc2 = 0.0
+            for k in range(W):
+                j = js + k
+                b0, b1 = band[0, i, k], band[1, i, k]
+                vs0 += b1 * v[j, 0]
+                vs1 += b1 * v[j, 1]
+                vs2 += b1 * v[j, 2]
+                ws0 += b1 * w[j, 0]
+                ws1 += b1 * w[j, 1]
+                ws2 += b1 * w[j, 2]
+                wc0 += b0 * w[j, 0]
+                wc1 += b0 * w[j, 1]
+                wc2 += b0 * w[j, 2]
+            h0, h1, h2 = _cross(wc0, wc1, wc2, cs0, cs1, cs2)
+            h0, h1, h2 = vs0 - h0, vs1 - h1, vs2 - h2
+            ga0 += tau * (r00 * h0 + r10 * h1 + r20 * h2)
+            ga1 += tau * (r01 * h0 + r11 * h1 + r21 * h2)
+            ga2 += tau * (r02 * h0 + r12 * h1 + r22 * h2)
+            km0 += tau * (r00 * ws0 + r10 * ws1 + r20 * ws2)
+            km1 += tau * (r01 * ws0 + r11 * ws1 + r21 * ws2)
+            km2 += tau * (r02 * ws0 + r12 * ws1 + r22 * ws2)
+        N0_, N1_, N2_ = CN0 * ga0, CN1 * ga1, CN2 * ga2
+        M0_, M1_, M2_ = CM0 * km0, CM1 * km1, CM2 * km2
+        x[i, _X_NM] = r00 * N0_ + r01 * N1_ + r02 * N2_
+        x[i, _X_NM + 1] = r10 * N0_ + r11 * N1_ + r12 * N2_
+        x[i, _X_NM + 2] = r20 * N0_ + r21 * N1_ + r22 * N2_
+        x[i, _X_NM + 3] = r00 * M0_ + r01 * M1_ + r02 * M2_
+        x[i, _X_NM + 4] = r10 * M0_ + r11 * M1_ + r12 * M2_
+        x[i, _X_NM + 5] = r20 * M0_ + r21 * M1_ + r22 * M2_
+        x[i, _X_RC], x[i, _X_RC + 1], x[i, _X_RC + 2] = rc0, rc1, rc2
+        x[i, _X_N], x[i, _X_N + 1], x[i, _X_N + 2] = N0_, N1_, N2_
+        x[i, _X_M], x[i, _X_M + 1], x[i, _X_M + 2] = M0_, M1_, M2_
+        if not dense:
+            _forward_row_cols(x, i, lu, lower, _X_NM, _X_NM + 6)
+    _solve_cols(x, lu, lower, upper, minv, dense, True, _X_NM, _X_NM + 6, _X_TMP)
+    # ---- pass 2: balance laws with the spline derivatives of the resultants
+    for i in range(n):
+        vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
+        ns0 = ns1 = ns2 = ms0 = ms1 = ms2 = 0.0
+        js = j0[i]
+        for k in range(W):
+            j = js + k
+            b0, b1 = band[0, i, k], band[1, i, k]
+            vc0 += b0 * v[j, 0]
+            vc1 += b0 * v[j, 1]
+            vc2 += b0 * v[j, 2]
+            wc0 += b0 * w[j, 0]
+            wc1 += b0 * w[j, 1]
+            wc2 += b0 * w[j, 2]
+            th0 += b0 * u[1, j, 0]
+            th1 += b0 * u[1, j, 1]
+            th2 += b0 * u[1, j, 2]
+            ns0 += b1 * x[j, _X_NM]
+            ns1 += b1 * x[j, _X_NM + 1]
+            ns2 += b1 * x[j, _X_NM + 2]
+            ms0 += b1 * x[j, _X_NM + 3]
+            ms1 += b1 * x[j, _X_NM + 4]
+            ms2 += b1 * x[j, _X_NM + 5]
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        rc0, rc1, rc2 = x[i, _X_RC], x[i, _X_RC + 1], x[i, _X_RC + 2]
+        N0_, N1_, N2_ = x[i, _X_N], x[i, _X_N + 1], x[i, _X_N + 2]
+        # tq = R^T m_s - Om x (J Om) + (R^T c_s) x N
+        om0 = r00 * wc0 + r10 * wc1 + r20 * wc2
+        om1 = r01 * wc0 + r11 * wc1 + r21 * wc2
+        om2 = r02 * wc0 + r12 * wc1 + r22 * wc2
+        p0, p1, p2 = _cross(om0, om1, om2, J0 * om0, J1 * om1, J2 * om2)
+        f0, f1, f2 = _cross(rc0, rc1, rc2, N0_, N1_, N2_)
+        tq0 = (r00 * ms0 + r10 * ms1 + r20 * ms2) - p0 + f0
+        tq1 = (r01 * ms0 + r11 * ms1 + r21 * ms2) - p1 + f1
+        tq2 = (r02 * ms0 + r12 * ms1 + r22 * ms2) - p2 + f2
+        if has_q:
+            ns0 += qx
+            ns1 += qy
+            ns2 += qz
+        if has_m:
+            tq0 += r00 * mx + r10 * my + r20 * mz
+            tq1 += r01 * mx + r11 * my + r21 * mz
+            tq2 += r02 * mx + r12 * my + r22 * mz
+        for e in range(ne):  # enhanced collocation at Neumann ends
+            if endi[e, 0] != i:
+                continue
+            nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 3] != 0:
+                rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
+                rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
+                rn2 = r20 * N0_ + r21 * N1_ + r22 * N2_
+                ns0 += fac * (endf[e, 2] - nrm * rn0)
+                ns1 += fac * (endf[e, 3] - nrm * rn1)
+                ns2 += fac * (endf[e, 4] - nrm * rn2)
+            if endi[e, 4] != 0:
+                m0, m1, m2 = endf[e, 5], endf[e, 6], endf[e, 7]
+                tq0 += fac * ((r00 * m0 + r10 * m1 + r20 * m2) - nrm * x[i, _X_M])
+                tq1 += fac * ((r01 * m0 + r11 * m1 + r21 * m2) - nrm * x[i, _X_M + 1])
+                tq2 += fac * ((r02 * m0 + r12 * m1 + r22 * m2) - nrm * x[i, _X_M + 2])
+        ang = math.sqrt(th0 * th0 + th1 * th1 + th2 * th2)
+        cD = _coef_D(ang, ser, thr)
+        xv0, xv1, xv2 = _cross(th0, th1, th2, wc0, wc1, wc2)
+        xx0, xx1, xx2 = _cross(th0, th1, th2, xv0, xv1, xv2)
+        z0, z1, z2 = tq0 / J0, tq1 / J1, tq2 / J2
+        if fixp[i]:
+            x[i, 0] = x[i, 1] = x[i, 2] = x[i, 6] = x[i, 7] = x[i, 8] = 0.0
+        else:
+            x[i, 0], x[i, 1], x[i, 2] = vc0, vc1, vc2
+            x[i, 6], x[i, 7], x[i, 8] = ns0 / mu, ns1 / mu, ns2 / mu
+        if fixr[i]:
+            x[i, 3] = x[i, 4] = x[i, 5] = x[i, 9] = x[i, 10] = x[i, 11] = 0.0
+        else:
+            x[i, 3] = wc0 - 0.5 * xv0 + cD * xx0
+            x[i, 4] = wc1 - 0.5 * xv1 + cD * xx1
+            x[i, 5] = wc2 - 0.5 * xv2 + cD * xx2
+            x[i, 9] = r00 * z0 + r01 * z1 + r02 * z2
+            x[i, 10] = r10 * z0 + r11 * z1 + r12 * z2
+            x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
+        if not dense:
+            _forward_row(x, i, lu, lower)
+    _finish_solve(x, lu, lower, upper, minv, dense, True, out)
+
+
 @njit(cache=True, fastmath=False)
 def rotation_angle_kernel(u, sf, si):
     """``max_i |(N0 u[1])_i|``."""
@@ -665,8 +911,8 @@ def _all_finite(x):
 
 @njit(cache=True, fastmath=False)
 def _step_workspace(c, v, w, R, K, Ks, s):
-    """Work arrays of a fused step loop, allocated once per call: the ``(n, 12)`` solve
-    buffer, ``s`` stage rates, the increment, a zero increment, a copy of the start state
+    """Work arrays of a fused step loop, allocated once per call: the ``(n, X_COLS)``
+    stage buffer, ``s`` stage rates, the increment, a zero increment, a copy of the start state
     and two spare states (stage state, next state)."""
     n = c.shape[0]
     st0 = (c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy())
@@ -674,7 +920,7 @@ def _step_workspace(c, v, w, R, K, Ks, s):
            np.empty_like(Ks))
     st2 = (np.empty_like(c), np.empty_like(v), np.empty_like(w), np.empty_like(R), np.empty_like(K),
            np.empty_like(Ks))
-    return np.empty((n, 12)), np.empty((s, 4, n, 3)), np.empty((4, n, 3)), np.zeros((4, n, 3)), st0, st1, st2
+    return np.empty((n, X_COLS)), np.empty((s, 4, n, 3)), np.empty((4, n, 3)), np.zeros((4, n, 3)), st0, st1, st2
 
 
 @njit(cache=True, fastmath=False)
@@ -1033,6 +1279,7 @@ class NumbaBeamKernels:
         si[_H_LU], si[_H_MINV], si[_H_ENDF] = offs["lu"], offs["minv"], offs["endf"]
         si[_H_ENDI], si[_H_J0] = _HEADER, _HEADER + endi.size
         si[_H_NT] = ser.shape[1]
+        si[_H_FORM] = FORM_MIXED if pb.mixed else FORM_PRIMAL
         si[_HEADER:_HEADER + endi.size] = endi.ravel()
         si[_HEADER + endi.size:] = j0
         self.sf, self.si = sf, si

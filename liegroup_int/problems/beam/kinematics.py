@@ -89,3 +89,9 @@ def strains(R: np.ndarray, c_s: np.ndarray, c_ss: np.ndarray, K: np.ndarray, gam
     """
     Rt_cs = rot_T(R, c_s)
     return Rt_cs, Rt_cs - gamma0, rot_T(R, c_ss) - cross(K, Rt_cs)
+
+
+def strain_rates(R: np.ndarray, c_s: np.ndarray, v_s: np.ndarray, w: np.ndarray, w_s: np.ndarray):
+    """Objective material strain rates ``dGamma/dt = R^T (v_s - omega x c_s)`` and
+    ``dK/dt = R^T omega_s`` (spatial ``omega``, ``dR/dt = hat(omega) R``), ``(n, 3)`` each."""
+    return rot_T(R, v_s - cross(w, c_s)), rot_T(R, w_s)
