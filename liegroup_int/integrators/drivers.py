@@ -15,7 +15,7 @@ import numpy as np
 from ..tableaux import ButcherTableau
 from .problem import Problem
 from .result import BlowUpError, Stats, StepSizeError
-from .rkmk import error_estimate, error_norm, rkmk_step
+from .rkmk import error_estimate, error_norm, rkmk_step, step_quadrature
 
 #: Default bound on the rotation angle of one step's increment [rad]. The closed-form
 #: dexpinv of SO(3) has its pole at 2 pi; 1 rad keeps every stage far from it.
@@ -39,6 +39,11 @@ def _workspace(problem: Problem, tab: ButcherTableau, y0) -> np.ndarray:
     return np.zeros((tab.stages,) + z.shape)
 
 
+def _quadrature_workspace(problem: Problem, tab: ButcherTableau) -> np.ndarray | None:
+    """Stage values of the problem's quadrature rate, or ``None`` if it has none."""
+    return np.zeros(tab.stages) if getattr(problem, "has_quadrature", False) else None
+
+
 def _blow_up(t: float, step: int) -> BlowUpError:
     return BlowUpError(f"non-finite state at t={t:.6g} (step {step}); the step is beyond the stability limit", t, step)
 
@@ -60,6 +65,7 @@ def _advance_compiled(stepper, tab: ButcherTableau, t: float, y, stop: float, dt
     :func:`integrate_fixed`. Returns ``(t, y)``."""
     res = stepper.advance(t, y, stop, dt, n, max_increment_angle)
     stats.accept_many(res.steps, res.h_min, res.h_max)
+    stats.quadrature += res.quadrature
     stats.rhs_evals += tab.stages * (res.steps + (res.status != "ok"))
     if res.status == "non-finite":
         raise _blow_up(res.t_fail, stats.steps + 1)
@@ -118,6 +124,7 @@ def integrate_fixed(
     hook = getattr(problem, "compiled_stepper", None)
     stepper = hook(tab) if (hook is not None and monitor is None) else None
     K = _workspace(problem, tab, y0) if stepper is None else None
+    Q = _quadrature_workspace(problem, tab)
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -134,7 +141,7 @@ def integrate_fixed(
         for i in range(n):
             t_next = stop if i == n - 1 else t_start + (i + 1) * dt
             h = t_next - t
-            y, u = rkmk_step(problem, tab, t, y, h, K)
+            y, u = rkmk_step(problem, tab, t, y, h, K, Q)
             stats.rhs_evals += tab.stages
             _check_finite(u, t_next, stats.steps + 1)
             angle = problem.rotation_angle(u)
@@ -142,6 +149,8 @@ def integrate_fixed(
                 raise _too_large(angle, max_increment_angle, t_next, stats.steps + 1)
             t = t_next
             stats.accept(h)
+            if Q is not None:
+                stats.quadrature += step_quadrature(tab, Q, h)
             if monitor is not None:
                 monitor(t, y, stats)
         if observer is not None:
@@ -218,6 +227,7 @@ def integrate_adaptive(
     hook = getattr(problem, "compiled_adaptive", None)
     stepper = hook(tab) if (hook is not None and monitor is None) else None
     K = _workspace(problem, tab, y0) if stepper is None else None
+    Q = _quadrature_workspace(problem, tab)
     k = min(tab.order, tab.order_hat) + 1
     beta1, beta2 = 0.7 / k, 0.4 / k
     t, y = t0, y0
@@ -233,6 +243,7 @@ def integrate_adaptive(
             res = stepper.advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps - stats.steps,
                                      max_increment_angle, safety, fac_min, fac_max)
             stats.accept_many(res.steps, res.h_min, res.h_max)
+            stats.quadrature += res.quadrature
             stats.rejected += res.rejected
             stats.rhs_evals += tab.stages * res.attempts
             t, y, h, err_prev = res.t, res.y, res.h, res.err_prev
@@ -248,7 +259,7 @@ def integrate_adaptive(
             raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
         land = t + h >= stop - 1e-12 * max(1.0, abs(stop))
         h_try = stop - t if land else h
-        y_new, u = rkmk_step(problem, tab, t, y, h_try, K)
+        y_new, u = rkmk_step(problem, tab, t, y, h_try, K, Q)
         stats.rhs_evals += tab.stages
         err = error_norm(error_estimate(tab, K, h_try),
                          np.maximum(problem.increment_scale(y), problem.increment_scale(y_new)), rtol, atol)
@@ -259,6 +270,8 @@ def integrate_adaptive(
             t = stop if land else t + h_try
             y = y_new
             stats.accept(h_try)
+            if Q is not None:
+                stats.quadrature += step_quadrature(tab, Q, h_try)
             fac = safety * err ** (-beta1) * err_prev**beta2 if err > 0 else fac_max
             h = min(h_max, h_try * min(fac_max, max(fac_min, fac)))
             err_prev = max(err, 1e-4)

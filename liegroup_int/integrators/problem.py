@@ -46,6 +46,8 @@ class Advance:
         Time at which the failed step would have ended (NaN if none).
     angle : float
         Rotation angle of the failed step's increment (``"angle"`` only).
+    quadrature : float
+        ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
     """
 
     y: object
@@ -56,6 +58,7 @@ class Advance:
     status: str
     t_fail: float
     angle: float
+    quadrature: float = 0.0
 
 
 
@@ -83,6 +86,8 @@ class AdaptiveAdvance:
         ``"ok"``: landed on the stop. ``"max-steps"``: the step budget ran out before
         the next attempt. ``"underflow"``: a rejection shrank the step below
         ``1e-14 max(1, |t|)``.
+    quadrature : float
+        ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
     """
 
     y: object
@@ -95,6 +100,8 @@ class AdaptiveAdvance:
     h_min: float
     h_max: float
     status: str
+    quadrature: float = 0.0
+
 
 class Problem(ABC):
     """Abstract RKMK problem. States ``y`` may be any object; increments are ndarrays."""
@@ -164,6 +171,17 @@ class Problem(ABC):
         Default: ``None`` (the generic path).
         """
         return None
+
+    #: Whether :meth:`quadrature_rate` is defined (the drivers then integrate it).
+    has_quadrature: bool = False
+
+    def quadrature_rate(self, t: float, y) -> float:
+        """An optional scalar ``q(t, y)`` whose time integral the drivers accumulate in
+        :attr:`Stats.quadrature` with each step's weights, ``h sum_r b_r q(t_r, y_r)``
+        over the stage states (so to the method's order). The beam returns the power of
+        its external loads, making the quadrature their work for the energy balance.
+        Only called when :attr:`has_quadrature` is true."""
+        raise NotImplementedError
 
     def is_finite(self, y) -> bool:
         """Whether the state holds only finite numbers."""

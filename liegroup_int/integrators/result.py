@@ -23,6 +23,11 @@ class Stats:
         Wall-clock time of the integration loop.
     h_min, h_max : float
         Smallest and largest accepted step.
+    quadrature : float
+        ``int q(t, y) dt`` along the accepted steps for a problem with a quadrature rate
+        (:meth:`Problem.quadrature_rate`: the beam's external power, so this is the work
+        of its loads), formed with the step's weights ``h sum_r b_r q(t_r, y_r)``; 0 for
+        other problems.
     """
 
     steps: int = 0
@@ -31,6 +36,7 @@ class Stats:
     wall_time_s: float = 0.0
     h_min: float = np.inf
     h_max: float = 0.0
+    quadrature: float = 0.0
 
     def accept(self, h: float) -> None:
         self.steps += 1
@@ -52,6 +58,7 @@ class Stats:
             "wall_time_s": self.wall_time_s,
             "h_min": float(self.h_min) if self.steps else None,
             "h_max": float(self.h_max) if self.steps else None,
+            "quadrature": float(self.quadrature),
         }
 
 

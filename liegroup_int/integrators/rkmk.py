@@ -37,24 +37,40 @@ def combine(weights: np.ndarray, K: np.ndarray, h: float, total: float | None = 
     return out.reshape(shape)
 
 
-def compute_stages(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray) -> None:
-    """Fill ``K[r] = dexpinv_{u_r}(f(t + c_r h, Lambda(u_r, y)))`` for every stage ``r``."""
+def compute_stages(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray,
+                   Q: np.ndarray | None = None) -> None:
+    """Fill ``K[r] = dexpinv_{u_r}(f(t + c_r h, Lambda(u_r, y)))`` for every stage ``r``,
+    and ``Q[r] = q(t + c_r h, Lambda(u_r, y))`` when a ``Q`` of shape ``(stages,)`` is
+    given (:meth:`Problem.quadrature_rate`)."""
     A, c = tab.A_f, tab.c_f
     K[0] = problem.increment_rate(t, y, np.zeros_like(K[0]))
+    if Q is not None:
+        Q[0] = problem.quadrature_rate(t, y)
     for r in range(1, tab.stages):
         u = combine(A[r, :r], K, h, c[r])
-        K[r] = problem.increment_rate(t + c[r] * h, problem.action(u, y), u)
+        y_r = problem.action(u, y)
+        K[r] = problem.increment_rate(t + c[r] * h, y_r, u)
+        if Q is not None:
+            Q[r] = problem.quadrature_rate(t + c[r] * h, y_r)
 
 
-def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray):
+def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray,
+              Q: np.ndarray | None = None):
     """One RKMK step from ``(t, y)``; returns ``(y_new, u)`` with ``u`` the total increment.
 
     ``K`` is a work array of shape ``(stages, *increment_shape)``; on return it holds
-    the stage rates, from which :func:`error_estimate` forms the embedded error.
+    the stage rates, from which :func:`error_estimate` forms the embedded error. With
+    ``Q`` (shape ``(stages,)``) the stage values of the problem's quadrature rate are
+    filled in too; the step's quadrature is then ``h * b . Q`` (:func:`step_quadrature`).
     """
-    compute_stages(problem, tab, t, y, h, K)
+    compute_stages(problem, tab, t, y, h, K, Q)
     u = combine(tab.b_f, K, h, 1.0)
     return problem.end_step(problem.action(u, y)), u
+
+
+def step_quadrature(tab: ButcherTableau, Q: np.ndarray, h: float) -> float:
+    """``h sum_r b_r Q[r]``: one step's share of the quadrature."""
+    return float(h * (tab.b_f @ Q))
 
 
 def error_estimate(tab: ButcherTableau, K: np.ndarray, h: float) -> np.ndarray:

@@ -17,6 +17,7 @@ from ..problems.beam import (
     Section,
     SectionConstants,
 )
+from ..problems.beam.damping import size_kelvin_voigt
 from .scene import ProblemKind, Scene, Simulation, register_kind
 from .schema import Key, SceneError, non_negative, positive
 
@@ -65,9 +66,9 @@ KEYS = {
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
         Key("material.G", "float", None, "shear modulus (overrides nu)", "Pa", positive),
         Key("material.rho", "float", None, "density", "kg/m^3", positive),
-        Key("material.kelvin_voigt", "float", 0.0,
-            "Kelvin-Voigt retardation time tau (strain-rate damping, ratio tau omega / 2; 0 = none)", "s",
-            non_negative),
+        Key("material.kelvin_voigt", "number_or_auto", 0.0,
+            "Kelvin-Voigt retardation time tau (strain-rate damping, ratio tau omega / 2; 0 = none; \"auto\" = "
+            "the least that leaves no growing mode at t = 0, from the dense spectrum)", "s", non_negative),
         Key("section.shape", "str", "circle", "cross-section", choices=("circle", "square", "rectangle", "explicit")),
         Key("section.d", "float", None, "diameter (circle)", "m", positive),
         Key("section.t", "float", None, "side (square)", "m", positive),
@@ -198,8 +199,14 @@ def _end_load(scene: Scene, end: str) -> EndLoad:
     return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof)
 
 
-def problem(scene: Scene) -> BeamProblem:
-    """The :class:`BeamProblem` of a validated beam scene."""
+def problem(scene: Scene, size_damping: bool = True) -> BeamProblem:
+    """The :class:`BeamProblem` of a validated beam scene.
+
+    With ``material.kelvin_voigt = "auto"`` the retardation time is sized from the dense
+    linearized spectrum at the initial state (:func:`~liegroup_int.problems.beam.damping.
+    size_kelvin_voigt`) and the report kept as ``damping_report``; ``size_damping=False``
+    builds the undamped problem without that cost (scene checks).
+    """
     curve = geometry(scene)
     a = scene["geometry.reference_vector"]
     try:
@@ -212,15 +219,28 @@ def problem(scene: Scene) -> BeamProblem:
                   end=_end_load(scene, "end"))
     bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"])
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
+    kv = scene["material.kelvin_voigt"]
     try:
-        return BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"],
-                           kelvin_voigt=scene["material.kelvin_voigt"], formulation=scene["space.formulation"])
+        pb = BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"],
+                         kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
+    if kv == "auto" and size_damping:
+        try:
+            y0 = pb.initial_state()
+        except ValueError as exc:
+            raise SceneError(f"{scene.source}: {exc}") from None
+        try:
+            rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+        except ValueError as exc:
+            raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc}") from None
+        pb = pb.with_kelvin_voigt(rep.tau)
+        pb.damping_report = rep
+    return pb
 
 
 def check(scene: Scene) -> None:
-    pb = problem(scene)
+    pb = problem(scene, size_damping=False)
     try:
         pb.initial_state()
     except ValueError as exc:
@@ -284,6 +304,7 @@ def build(scene: Scene) -> Simulation:
                            "n_ctrl": scene["space.n_ctrl"],
                            "length": pb.space.length, "C_star": 4.0,
                            "kelvin_voigt": pb.tau},
+        **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
     }
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),

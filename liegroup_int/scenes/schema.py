@@ -32,7 +32,8 @@ class Key:
         Dotted key, e.g. ``"integrator.dt"``.
     kind : str
         ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``"vec3"`` (3 floats),
-        ``"floats"`` (list of floats), ``"float_or_auto"``, ``"table"`` (list of
+        ``"floats"`` (list of floats), ``"float_or_auto"`` (number, ``"auto"`` or
+        ``"none"``), ``"number_or_auto"`` (number or ``"auto"``), ``"table"`` (list of
         ``[t, value]`` pairs) or ``"strs"`` (list of strings).
     default : object
         Default value, or ``REQUIRED``.
@@ -115,6 +116,12 @@ def coerce(key: Key, value, where: str):
             return None
         if not _is_number(value):
             fail('a finite number, "auto", or "none" (adaptive stepping with rtol/atol)')
+        value = float(value)
+    elif k == "number_or_auto":
+        if value == "auto":
+            return value
+        if not _is_number(value):
+            fail('a finite number' + (f" [{key.unit}]" if key.unit else "") + ' or "auto"')
         value = float(value)
     elif k == "int":
         if isinstance(value, bool) or not isinstance(value, int):

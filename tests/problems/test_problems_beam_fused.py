@@ -60,10 +60,19 @@ def _run(pb, y0, t_span, dt, fused, t_out=None, max_angle=1.0):
         return exc, stats, rec
 
 
-def _same_stats(a, b):
+def _same_stats(a, b, work=True):
+    """Equal counters; the work of the loads (stage powers summed in compiled code with
+    FMA contraction, against NumPy dot products) to round-off, unless ``work`` is false
+    (a run blowing up amplifies that round-off like everything else)."""
     da, db = a.as_dict(), b.as_dict()
     da.pop("wall_time_s"), db.pop("wall_time_s")
+    qa, qb = da.pop("quadrature"), db.pop("quadrature")
     assert da == db
+    if not work:
+        return
+    # the stage velocities agree to ~1e-11 of their scale; the work sums stage powers of
+    # both signs, so its relative agreement is looser: 1e-9 (measured 2e-12)
+    assert qa == pytest.approx(qb, rel=1e-9, abs=1e-300, nan_ok=True)
 
 
 @pytest.fixture(scope="module", params=[(s, f) for f in ("primal", "mixed") for s in BEAM_SCENES],
@@ -194,7 +203,7 @@ def test_errors_match_the_generic_loop(case):
         got[fused] = (exc.t, exc.step, str(exc), stats, rec.t)
     (t1, s1, m1, st1, o1), (t2, s2, m2, st2, o2) = got[True], got[False]
     assert (t1, s1, m1, o1) == (t2, s2, m2, o2)
-    _same_stats(st1, st2)
+    _same_stats(st1, st2, work=case != "blow-up")
     assert st1.rhs_evals == (st1.steps + 1) * TAB.stages and s1 == st1.steps + 1
     if case != "angle at the first step":
         assert st1.steps > 2  # the failure is in a later advance call than the first

@@ -83,7 +83,8 @@ _IA, _IB, _IC, _ID, _IB1, _IC1 = range(6)
 _H_N, _H_W, _H_L, _H_U, _H_DENSE, _H_NE = 0, 1, 2, 3, 4, 5
 _H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0, _H_NT = range(6, 16)
 _H_FORM = 16  # formulation: FORM_PRIMAL or FORM_MIXED
-_HEADER = 17
+_H_QUAD = 17  # offset of the quadrature weights (n) in sf
+_HEADER = 18
 FORM_PRIMAL, FORM_MIXED = 0, 1
 #: Columns of the stage work array ``x``: 12 right-hand sides, then (mixed only) the
 #: resultant values n, m (6, solved in place into their control values), R^T c_s (3),
@@ -92,9 +93,11 @@ _X_RHS, _X_NM, _X_RC, _X_N, _X_M, _X_TMP, X_COLS = 0, 12, 18, 21, 24, 27, 33
 # (everything that may change outside this file - series length and coefficients, the
 # threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
-# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold tau (Kelvin-Voigt)
-_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU = 0, 3, 6, 9, 10, 13, 16, 17, 18, 19
-_N_PRM = 20
+# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold tau (Kelvin-Voigt) power (1: compute
+# the external power per stage, BeamProblem.quadrature_rate)
+_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU, _P_POW = (0, 3, 6, 9, 10, 13, 16, 17, 18,
+                                                                                19, 20)
+_N_PRM = 21
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
 _NEI, _NEF = 5, 8
@@ -201,6 +204,12 @@ def _views(sf, si):
     endi = si[si[_H_ENDI]:si[_H_ENDI] + _NEI * ne].reshape((ne, _NEI))
     j0 = si[si[_H_J0]:si[_H_J0] + n]
     return prm, ser, geo, band, lu, minv, endf, endi, j0
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _quad_view(sf, si):
+    """Collocation quadrature weights ``(n,)`` (``BeamProblem.quad``)."""
+    return sf[si[_H_QUAD]:si[_H_QUAD] + si[_H_N]]
 
 
 # ====================================================================== M_c solve
@@ -450,15 +459,16 @@ def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
     """
     fixp, fixr = dirichlet_rows(sf, si)
     x = np.empty((c.shape[0], X_COLS))
-    rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out)
+    rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, np.empty(1))
 
 
 @njit(cache=True, fastmath=_FM)
-def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
+def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
     """:func:`rates_kernel` without allocation: ``fixp, fixr`` from :func:`dirichlet_rows`,
-    ``x`` an ``(n, X_COLS)`` work array (overwritten with the right-hand sides)."""
+    ``x`` an ``(n, X_COLS)`` work array (overwritten with the right-hand sides). When the
+    problem has loads that work, ``pw[0]`` receives their power (``quadrature_rate``)."""
     if si[_H_FORM] == FORM_MIXED:
-        rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out)
+        rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw)
         return
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
@@ -474,6 +484,9 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
     has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
     thr = prm[_P_THR]
     tau = prm[_P_TAU]
+    power = prm[_P_POW] != 0.0
+    quad = _quad_view(sf, si)
+    power_sum = 0.0
     for i in range(n):
         cs0 = cs1 = cs2 = css0 = css1 = css2 = 0.0
         vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
@@ -585,11 +598,16 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
             tq0 += r00 * mx + r10 * my + r20 * mz
             tq1 += r01 * mx + r11 * my + r21 * mz
             tq2 += r02 * mx + r12 * my + r22 * mz
+        if power:  # int (q . v + m_d . omega) ds by the collocation quadrature
+            power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
         # enhanced collocation at Neumann ends
         for e in range(ne):
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if power:  # dead end loads (zero where absent) on the end velocities
+                power_sum += (endf[e, 2] * vc0 + endf[e, 3] * vc1 + endf[e, 4] * vc2
+                              + endf[e, 5] * wc0 + endf[e, 6] * wc1 + endf[e, 7] * wc2)
             if endi[e, 3] != 0:
                 rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
                 rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
@@ -628,10 +646,11 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
         if not dense:  # forward sweep of the banded solve, fused (rows < i are final)
             _forward_row(x, i, lu, lower)
     _finish_solve(x, lu, lower, si[_H_U], minv, dense, True, out)
+    pw[0] = power_sum
 
 
 @njit(cache=True, fastmath=_FM)
-def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out):
+def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
     """Stage rate of the mixed formulation (``BeamProblem._rates`` with
     ``formulation="mixed"``) into ``out`` ``(4, n, 3)``; ``x`` is the ``(n, X_COLS)``
     work array.
@@ -655,6 +674,9 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out):
     has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
     thr = prm[_P_THR]
     tau = prm[_P_TAU]
+    power = prm[_P_POW] != 0.0
+    quad = _quad_view(sf, si)
+    power_sum = 0.0
     # ---- pass 1: pointwise constitutive resultants
     for i in range(n):
         cs0 = cs1 = cs2 = 0.0
@@ -754,10 +776,15 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out):
             tq0 += r00 * mx + r10 * my + r20 * mz
             tq1 += r01 * mx + r11 * my + r21 * mz
             tq2 += r02 * mx + r12 * my + r22 * mz
+        if power:  # int (q . v + m_d . omega) ds by the collocation quadrature
+            power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
         for e in range(ne):  # enhanced collocation at Neumann ends
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if power:  # dead end loads (zero where absent) on the end velocities
+                power_sum += (endf[e, 2] * vc0 + endf[e, 3] * vc1 + endf[e, 4] * vc2
+                              + endf[e, 5] * wc0 + endf[e, 6] * wc1 + endf[e, 7] * wc2)
             if endi[e, 3] != 0:
                 rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
                 rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
@@ -792,6 +819,7 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out):
         if not dense:
             _forward_row(x, i, lu, lower)
     _finish_solve(x, lu, lower, upper, minv, dense, True, out)
+    pw[0] = power_sum
 
 
 @njit(cache=True, fastmath=False)
@@ -925,22 +953,28 @@ def _step_workspace(c, v, w, R, K, Ks, s):
 
 @njit(cache=True, fastmath=False)
 def _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                    u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h):
+                    u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h):
     """One RKMK step of size ``h`` from ``(t, y0)``: the stages of
     :func:`liegroup_int.integrators.rkmk.compute_stages` into ``Kst`` (loads rewritten
     into ``sf`` at every stage time; ``y1`` is the stage state), the combined increment
-    into ``u`` and ``y2 = end_step(Lambda(u, y0))`` (Newton-Schulz). ``y0`` is not written."""
+    into ``u`` and ``y2 = end_step(Lambda(u, y0))`` (Newton-Schulz). ``y0`` is not written.
+    Returns the step's quadrature ``h sum_r b_r P_r`` of the stage powers ``pws`` (0 when
+    the problem's loads do no work)."""
     s = b.shape[0]
     _set_loads(sf, lpos, lvec, lprof, t)
-    rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0])
+    rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0], pws[0:1])
     for r in range(1, s):
         _combine(A[r], r, cc[r], Kf, h, uf)
         action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
         _set_loads(sf, lpos, lvec, lprof, t + cc[r] * h)
-        rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r])
+        rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r], pws[r:r + 1])
     _combine(b, s, 1.0, Kf, h, uf)
     action_kernel(u, c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2, sf, si)
     _newton_schulz(R2)
+    q = 0.0
+    for r in range(s):
+        q += b[r] * pws[r]
+    return h * q
 
 
 @njit(cache=True, fastmath=False)
@@ -961,35 +995,39 @@ def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
 
     Returns
     -------
-    (c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, angle)
+    (c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, angle, quadrature)
         The state after the ``steps`` accepted steps and its time ``t``; ``status`` is
         :data:`ADVANCE_OK` or the failure of the next step (:data:`ADVANCE_NON_FINITE`,
         :data:`ADVANCE_ANGLE`), which would have ended at ``t_fail`` and carried the
-        rotation ``angle``; ``h_min, h_max`` over the accepted steps (``inf, 0`` if none).
+        rotation ``angle``; ``h_min, h_max`` over the accepted steps (``inf, 0`` if none);
+        ``quadrature``: the work of the loads over the accepted steps.
     """
     n, s = c.shape[0], b.shape[0]
     fixp, fixr = dirichlet_rows(sf, si)
     x, Kst, u, zero, st0, st1, st2 = _step_workspace(c, v, w, R, K, Ks, s)
     Kf = Kst.reshape((s, 12 * n))
     uf = u.reshape(12 * n)
+    pws = np.zeros(s)
     c0, v0, w0, R0, K0, Ks0 = st0
     c1, v1, w1, R1, K1, Ks1 = st1
     c2, v2, w2, R2, K2, Ks2 = st2
     t, h_min, h_max = t_start, np.inf, 0.0
+    quad = 0.0
     for i in range(n_steps):
         t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
         h = t_next - t
-        _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                        u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h)
+        q = _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
+                            u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h)
         if not _all_finite(uf):
-            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan
+            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan, quad
         ang = rotation_angle_kernel(u, sf, si)
         if ang > max_angle:
-            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang
+            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang, quad
         c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
         t = t_next
         h_min, h_max = min(h_min, h), max(h_max, h)
-    return c0, v0, w0, R0, K0, Ks0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0
+        quad += q
+    return c0, v0, w0, R0, K0, Ks0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad
 
 
 # ====================================================================== fused adaptive loop
@@ -1077,7 +1115,7 @@ def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
 
     Returns
     -------
-    (c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status)
+    (c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quadrature)
         State and time reached (``stop`` if ``status`` is :data:`ADAPTIVE_OK`), the
         controller state, the accepted and rejected steps and all attempts of this call,
         the extreme accepted steps (``inf, 0`` if none), and the status
@@ -1090,6 +1128,8 @@ def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
     Kf = Kst.reshape((s, 12 * n))
     uf = u.reshape(12 * n)
     errf = np.empty(12 * n)
+    pws = np.zeros(s)
+    quad = 0.0
     c0, v0, w0, R0, K0, Ks0 = st0
     c1, v1, w1, R1, K1, Ks1 = st1
     c2, v2, w2, R2, K2, Ks2 = st2
@@ -1099,11 +1139,12 @@ def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
     while True:
         if steps >= max_steps_left:
             return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                    h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS)
+                    h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS, quad)
         land = t + h >= stop - land_tol
         h_try = stop - t if land else h
-        _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                        u, uf, Kst, Kf, x, zero, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h_try)
+        q = _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
+                            u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t,
+                            h_try)
         attempts += 1
         _combine(e, s, 0.0, Kf, h_try, errf)
         err = _error_norm(errf, c0, c2, rtol, atol)
@@ -1114,17 +1155,18 @@ def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
             t = stop if land else t + h_try
             c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
             steps += 1
+            quad += q
             h_min_acc, h_max_acc = _py_min(h_min_acc, h_try), _py_max(h_max_acc, h_try)
             h, err_prev = _h_accepted(err, err_prev, h_try, h_max, safety, fac_min, fac_max, beta1, beta2)
             if land:
                 return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                        h_min_acc, h_max_acc, ADAPTIVE_OK)
+                        h_min_acc, h_max_acc, ADAPTIVE_OK, quad)
         else:
             rejected += 1
             h = _h_rejected(err, ang, h_try, max_angle, safety, fac_min, inv_k_neg)
             if h < 1e-14 * max(1.0, abs(t)):
                 return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                        h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW)
+                        h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW, quad)
 
 
 # ====================================================================== Python side
@@ -1238,6 +1280,7 @@ class NumbaBeamKernels:
         prm[_P_HASM] = float(pb.has_m)
         prm[_P_THR] = float(TAYLOR_THRESHOLD)
         prm[_P_TAU] = float(pb.tau)
+        prm[_P_POW] = float(pb.has_quadrature)
         ser = np.array([[float(x) for x in TAYLOR[k]] for k in _SERIES_KEYS])
         if pb.curved:
             geo = np.concatenate([pb.gamma0, pb.K0, pb.K0_s], axis=1)
@@ -1264,7 +1307,7 @@ class NumbaBeamKernels:
                     profiles.append((k, col, vec, prof))
 
         blocks = [("prm", prm), ("ser", ser), ("geo", geo), ("band", bands), ("lu", ab),
-                  ("minv", minv), ("endf", endf)]
+                  ("minv", minv), ("endf", endf), ("quad", np.asarray(pb.quad, dtype=float))]
         offs, pos = {}, 0
         for name, arr in blocks:
             offs[name] = pos
@@ -1280,6 +1323,7 @@ class NumbaBeamKernels:
         si[_H_ENDI], si[_H_J0] = _HEADER, _HEADER + endi.size
         si[_H_NT] = ser.shape[1]
         si[_H_FORM] = FORM_MIXED if pb.mixed else FORM_PRIMAL
+        si[_H_QUAD] = offs["quad"]
         si[_HEADER:_HEADER + endi.size] = endi.ravel()
         si[_HEADER + endi.size:] = j0
         self.sf, self.si = sf, si
@@ -1430,10 +1474,10 @@ class FusedBeamStepper:
         arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
         out = advance_kernel(*arr, self.sf, self.si, self.A, self.b, self.c, self.lpos, self.lvec,
                              self.lprof, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
-        c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, ang = out
+        c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, ang, quad = out
         status = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}[status]
         return Advance(self.state_cls(c, v, w, R, K, Ks), float(t), int(steps), float(h_min), float(h_max),
-                       status, float(t_fail), float(ang))
+                       status, float(t_fail), float(ang), float(quad))
 
 
 class FusedBeamAdaptive(FusedBeamStepper):
@@ -1486,6 +1530,7 @@ class FusedBeamAdaptive(FusedBeamStepper):
                               self.lprof, float(t), float(stop), float(h), float(err_prev), float(rtol),
                               float(atol), float(h_max), int(max_steps_left), float(max_angle), float(safety),
                               float(fac_min), float(fac_max), self.beta1, self.beta2, self.inv_k_neg)
-        c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status = out
+        c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quad = out
         return AdaptiveAdvance(self.state_cls(c, v, w, R, K, Ks), float(t), float(h), float(err_prev), int(steps),
-                               int(rejected), int(attempts), float(h_min), float(h_max_acc), self._STATUS[status])
+                               int(rejected), int(attempts), float(h_min), float(h_max_acc), self._STATUS[status],
+                               float(quad))

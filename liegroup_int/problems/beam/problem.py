@@ -133,6 +133,8 @@ class BeamProblem(Problem):
         if not (np.isfinite(kelvin_voigt) and kelvin_voigt >= 0.0):
             raise ValueError(f"kelvin_voigt: expected a retardation time >= 0 [s], got {kelvin_voigt!r}")
         self.tau = kelvin_voigt
+        #: :class:`~.damping.DampingReport` when ``tau`` was sized automatically
+        self.damping_report = None
         self.space, self.constants = space, constants
         self.bcs, self.loads, self.initial = bcs, loads, initial
         n = space.n_ctrl
@@ -156,6 +158,10 @@ class BeamProblem(Problem):
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
+        # loads that do work: the drivers then integrate their power (quadrature_rate)
+        self.has_quadrature = bool(self.has_q or self.has_m or any(
+            (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
+            for e in self.neumann_ends))
         # --- backend selection (compiled kernels: kernels_numba.py) -------------------
         if backend not in ("numpy", "numba"):
             raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
@@ -168,6 +174,11 @@ class BeamProblem(Problem):
                 raise ImportError(f"backend='numba' needs numba ({exc}); use backend='numpy'") from exc
             self._nb = NumbaBeamKernels(self)
         # --- end backend selection ----------------------------------------------------
+
+    def with_kelvin_voigt(self, tau: float) -> "BeamProblem":
+        """The same problem (space, data, backend, formulation) with damping ``tau`` [s]."""
+        return BeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial, backend=self.backend,
+                           kelvin_voigt=tau, formulation=self.formulation)
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
@@ -358,6 +369,32 @@ class BeamProblem(Problem):
         kd_s = rot_T(R, w_ss) - cross(K, kd)
         return gam + tau * gd, gam_s + tau * gd_s, KM + tau * kd, KM_s + tau * kd_s
 
+    def quadrature_rate(self, t: float, y: BeamState) -> float:
+        """Power of the external loads [W] at ``(t, y)``: the drivers integrate it into
+        their work ``W(t)`` (:attr:`Stats.quadrature`), so ``E_kin + E_strain - W`` is
+        conserved up to time and space error (:meth:`energy_balance`).
+
+        ``P = f_d(t) int (q . v + m_d . omega) ds + sum_ends (F(t) . v + M(t) . omega)``
+        with the distributed force ``q`` (gravity included) and couple ``m_d``, their
+        profile ``f_d``, the dead end forces ``F`` and couples ``M`` at Neumann ends, and
+        spatial velocities; ``int ds`` by the collocation quadrature (exact on the
+        trial space).
+        """
+        p = 0.0
+        if self.has_q or self.has_m:
+            f = self.loads.distributed_profile(t)
+            if self.has_q:
+                p += f * float(self.q @ (self.quad @ (self.N0 @ y.v)))
+            if self.has_m:
+                p += f * float(self.m_dist @ (self.quad @ (self.N0 @ y.w)))
+        for e in self.neumann_ends:
+            ld = e.load
+            if e.force_neumann and np.any(ld.force):
+                p += ld.force_profile(t) * float(np.dot(ld.force, y.v[e.index]))
+            if e.moment_neumann and np.any(ld.couple):
+                p += ld.couple_profile(t) * float(np.dot(ld.couple, y.w[e.index]))
+        return p
+
     # ------------------------------------------------------------------ diagnostics
     def tip(self, y: BeamState) -> np.ndarray:
         """Centroid at ``s = L`` (last control point of an open knot vector), ``(3,)``."""
@@ -380,6 +417,12 @@ class BeamProblem(Problem):
             if e.force_neumann and np.any(ld.force) and ld.force_profile.is_constant:
                 potential -= float(np.dot(ld.force, y.c[e.index]))
         return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
+
+    def mechanical_energy(self, y: BeamState) -> float:
+        """Kinetic plus strain energy [J]; minus the work of the loads
+        (:meth:`quadrature_rate` integrated in time) it is conserved."""
+        p = self.energy_parts(y)
+        return p["kinetic"] + p["strain"]
 
     def energy(self, y: BeamState, t: float = 0.0) -> float:
         """Total energy at time ``t``: kinetic + strain + distributed-load potential (with

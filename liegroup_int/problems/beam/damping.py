@@ -1,0 +1,123 @@
+"""Kelvin-Voigt damping sized from the measured spectrum (``material.kelvin_voigt = "auto"``).
+
+A collocation operator may have complex pairs of ``M_c^-1 K`` and so modes that grow like
+``exp(Re(lambda) t)`` (docs/verification.md, "Stability of the semi-discretization").
+Kelvin-Voigt strain-rate damping with retardation time ``tau`` shifts a mode of angular
+frequency ``omega`` by about ``-tau omega^2 / 2``, so ``tau >= 2 Re(lambda) / |lambda|^2``
+removes that mode's growth (the rule of thumb). :func:`size_kelvin_voigt` starts there
+and checks each candidate on the dense linearized spectrum, doubling until no mode grows,
+then narrows the bracket, so the damping is the least that does it (to a factor
+``2^(1/2^refine)``), and reports the damping ratio it puts on the first mode.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...integrators.spectrum import eigenvalues
+
+#: Real part [1/s] above which a linearized mode counts as growing.
+GROWTH_THRESHOLD = 1e-2
+
+
+@dataclass(frozen=True)
+class DampingReport:
+    """What :func:`size_kelvin_voigt` measured.
+
+    Attributes
+    ----------
+    tau : float
+        Retardation time chosen [s] (0 if no mode grows undamped).
+    max_real_undamped : float
+        Largest ``Re(lambda)`` without damping [1/s].
+    at_imag : float
+        ``|Im(lambda)|`` of that mode [1/s].
+    max_real : float
+        Largest ``Re(lambda)`` with ``tau`` [1/s].
+    omega1 : float
+        Smallest non-zero ``|Im(lambda)|`` [1/s] (the first mode).
+    zeta1 : float
+        Damping ratio on the first mode, ``tau omega1 / 2``.
+    lam_max : float
+        Largest ``|lambda|`` with ``tau`` [1/s] (stable steps).
+    spectra : int
+        Dense spectra computed.
+    """
+
+    tau: float
+    max_real_undamped: float
+    at_imag: float
+    max_real: float
+    omega1: float
+    zeta1: float
+    lam_max: float
+    spectra: int
+
+    def as_dict(self) -> dict:
+        return {k: float(v) if k != "spectra" else int(v) for k, v in self.__dict__.items()}
+
+
+def _first_frequency(lam: np.ndarray) -> float:
+    im = np.abs(lam.imag)
+    im = im[im > 1e-6 * max(1.0, float(np.max(np.abs(lam))))]
+    return float(np.min(im)) if im.size else 0.0
+
+
+def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THRESHOLD, refine: int = 3,
+                      max_doublings: int = 40) -> DampingReport:
+    """Least Kelvin-Voigt retardation time that leaves no growing linearized mode at ``y``.
+
+    Parameters
+    ----------
+    with_tau : callable
+        ``with_tau(tau) -> Problem``: the problem with damping ``tau`` (and everything
+        else equal).
+    y : state
+        Where to linearize (the initial state for ``"auto"``).
+    t : float
+        Time of the linearization (load profiles).
+    threshold : float
+        ``Re(lambda)`` [1/s] above which a mode counts as growing.
+    refine : int
+        Bisections (in ``log tau``) after the first ``tau`` that works.
+    max_doublings : int
+        Bound on the search; raises ``ValueError`` beyond it.
+
+    Returns
+    -------
+    DampingReport
+    """
+    lam0 = eigenvalues(with_tau(0.0), t, y)
+    count = 1
+    k0 = int(np.argmax(lam0.real))
+    re0, im0 = float(lam0.real[k0]), float(abs(lam0.imag[k0]))
+    omega1 = _first_frequency(lam0)
+    if re0 <= threshold:
+        return DampingReport(0.0, re0, im0, re0, omega1, 0.0, float(np.max(np.abs(lam0))), count)
+    grow = lam0[lam0.real > threshold]
+    tau = float(np.max(2.0 * grow.real / np.abs(grow) ** 2))  # rule of thumb, per growing mode
+    lo = 0.0
+    for _ in range(max_doublings):
+        lam = eigenvalues(with_tau(tau), t, y)
+        count += 1
+        if float(np.max(lam.real)) <= threshold:
+            break
+        lo, tau = tau, 2.0 * tau
+    else:
+        raise ValueError(f"no Kelvin-Voigt retardation time up to {tau:.3g} s removes the growing mode "
+                         f"(Re lambda = {re0:.3g} 1/s)")
+    best = lam
+    hi = tau
+    if lo > 0.0:
+        for _ in range(refine):
+            mid = float(np.sqrt(lo * hi))
+            lam = eigenvalues(with_tau(mid), t, y)
+            count += 1
+            if float(np.max(lam.real)) <= threshold:
+                hi, best = mid, lam
+            else:
+                lo = mid
+    return DampingReport(hi, re0, im0, float(np.max(best.real)), omega1, 0.5 * hi * omega1,
+                         float(np.max(np.abs(best))), count)
