@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .guards import EnergyBalance, diagnose, start_checks
 from .integrators import BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method
 from .io import HistoryWriter, write_json
 from .io.checkpoint import read_checkpoint, write_checkpoint
@@ -145,21 +146,6 @@ class EnergyGuard:
         self.scale = max(self.scale, e)
 
 
-def stable_dt_hint(scene: Scene, sim) -> str:
-    """``stable dt estimate ...`` for problems with a spectral radius (beams), else ''."""
-    from .integrators import spectral_radius, stable_step
-    from .problems.beam import BeamProblem
-
-    if not isinstance(sim.problem, BeamProblem):
-        return ""
-    try:
-        lam = spectral_radius(sim.problem, 0.0, sim.y0)
-        step = stable_step(resolve_method(scene.integrator.method), lam, scene.t_end)
-    except Exception:  # the hint must never mask the original error
-        return ""
-    return f"stable dt estimate {step.dt:.3g} s (|lambda|max = {lam:.3g} 1/s, {step.rule})"
-
-
 def write_plots(out_dir: Path, scene: Scene, sim, history: Path, shapes=None) -> list[str]:
     """History PNG, and for problems that record shapes, a deformed-shape PNG (+ npz)."""
     from .io import plot_history, plot_shapes, read_history
@@ -218,35 +204,57 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         keeps the rows written so far, ``summary.json`` records the failure.
     """
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     sim = KINDS[scene.kind].build(scene)
     spec = scene.integrator
     dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
     tab = resolve_method(spec.method)
     t0, y0, stats = 0.0, sim.y0, Stats()
     every = record_interval(scene, dt)
+    e0 = None
     if resume is not None:
         t0, y0 = resume["t"], sim.from_arrays(resume["state"])
         every = resume["meta"]["every"]
+        e0 = resume["meta"].get("energy0")
         st = resume["stats"]
         stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
-                      wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"])
+                      wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
+                      quadrature=st.get("quadrature", 0.0))
         if scene.t_end <= t0:
             raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
+    # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
+    # step or a spurious growing mode at rest
+    guard_facts, guard_warnings = start_checks(scene, sim, tab, dt, t0, y0)
+    for w in guard_warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    out_dir.mkdir(parents=True, exist_ok=True)
     t_out = output_times(scene.t_end, every)
     t_out = t_out[t_out > t0 + 1e-9 * every]
     history = out_dir / "history.csv"
     columns = sim.info.get("columns")
     if resume is not None and history.exists():
         _truncate_csv(history, t0 + 1e-9 * every)
-    writer = HistoryWriter(history, sim.diagnostics, columns, append=resume is not None)
+    balance = None
+    if sim.conserved is not None:
+        if e0 is None:
+            e0 = float(sim.conserved(y0))
+        balance = EnergyBalance(sim.conserved, stats, e0, scene.guard.energy_balance,
+                                scale=resume["meta"].get("energy_scale", 0.0) if resume is not None else 0.0)
+    quantities = {}
+    for q in scene.output.quantities:  # the run's own quantities need its work of the loads
+        if q == "energy_balance" and balance is not None:
+            quantities[q] = balance.evaluate
+        elif q == "work" and balance is not None:
+            quantities[q] = balance.work
+        elif q in sim.diagnostics:
+            quantities[q] = sim.diagnostics[q]
+    writer = HistoryWriter(history, quantities, columns, append=resume is not None)
     observers = [writer]
     h5 = None
     if scene.output.hdf5:
         from .io.hdf5 import Hdf5Writer
 
         attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
-        h5 = Hdf5Writer(out_dir / "results.h5", sim.diagnostics, columns, sim.to_arrays, attrs, append=resume is not None)
+        h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, sim.to_arrays, attrs, append=resume is not None)
         if resume is not None:
             h5.truncate_after(t0 + 1e-9 * every)
         observers.append(h5)
@@ -262,10 +270,21 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         if resume is not None:
             pv.resume_after(t0 + 1e-9 * every)
         observers.append(pv)
-    meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt}
+    meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt,
+            "energy0": e0}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
         observers.insert(1, EnergyGuard(writer, scene.output.blowup_factor, lambda: ckpt.stats))
+    last = {"t": t0, "y": y0}  # the last recorded state, for the failure diagnosis
+
+    def remember(t, y):
+        last["t"], last["y"] = t, y
+        if balance is not None:
+            meta["energy_scale"] = balance.scale
+
+    observers.append(remember)
+    if balance is not None:  # after the writers, so the failing row is on disk
+        observers.append(balance)
     observers.append(ckpt)
     first = [resume is not None]
 
@@ -286,6 +305,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         "tableau": tab.name, "dt": dt, "rtol": spec.rtol, "atol": spec.atol, "t_end": scene.t_end,
         "version": __version__, "scene_keys": dict(scene.raw), "resumed_from": t0 if resume is not None else None,
         **sim.info,
+        **({"guards": guard_facts} if guard_facts else {}),
+        **({"warnings": guard_warnings} if guard_warnings else {}),
     }
     old_handlers = _install_signal_handlers(ckpt)
     t_reached, y_final, status, error = t0, y0, "ok", None
@@ -306,9 +327,9 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
                  f"--resume {out_dir}")
     except IntegrationError as exc:
         status, error, t_reached = "failed", f"{scene.name}: {exc}", exc.t
-        hint = stable_dt_hint(scene, sim)
-        if hint:
-            error += f"; {hint}"
+        cause = diagnose(scene, sim, tab, dt, last["t"], last["y"])
+        if cause:
+            error += f"; {cause}"
     finally:
         for sig, h in old_handlers.items():
             signal.signal(sig, h)
@@ -317,6 +338,10 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
             h5.close()
         progress.close(t_reached)
     summary.update({"status": status, "t_reached": t_reached, "history_rows": writer.rows})
+    if balance is not None:
+        summary["energy_balance"] = {"defect": balance.defect, "worst_fraction": balance.worst,
+                                     "energy_scale": balance.scale, "work": stats.quadrature,
+                                     "tolerance": scene.guard.energy_balance}
     summary.update(stats.as_dict())
     summary["wall_time_s"] = stats.wall_time_s if status == "ok" else time.perf_counter() - start
     if status == "ok":

@@ -18,7 +18,7 @@ from ..problems.beam import (
     SectionConstants,
 )
 from ..problems.beam.damping import size_kelvin_voigt
-from .scene import ProblemKind, Scene, Simulation, register_kind
+from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
 from .schema import Key, SceneError, non_negative, positive
 
 ZERO = (0.0, 0.0, 0.0)
@@ -103,7 +103,8 @@ KEYS = {
     ]
 }
 
-QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error")
+QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error", "energy_balance",
+              "work")
 COLUMNS = {
     "tip": ["tip_x", "tip_y", "tip_z"],
     "momentum": ["p_x", "p_y", "p_z"],
@@ -248,6 +249,8 @@ def check(scene: Scene) -> None:
 
 
 def diagnostics(pb: BeamProblem, names) -> dict:
+    """Quantities computed from the state; ``energy_balance`` and ``work`` need the run's
+    work of the loads and are added by the runner (liegroup_int/guards.py)."""
     table = {
         "tip": lambda t, y: pb.tip(y),
         "energy": lambda t, y: pb.energy(y, t),
@@ -257,7 +260,7 @@ def diagnostics(pb: BeamProblem, names) -> dict:
         "angular_momentum": lambda t, y: pb.momentum(y)[1],
         "orth_error": lambda t, y: pb.orth_error(y),
     }
-    return {q: table[q] for q in names}
+    return {q: table[q] for q in names if q in table}
 
 
 class ShapeRecorder:
@@ -309,8 +312,37 @@ def build(scene: Scene) -> Simulation:
     }
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
                      final_state=final_state, info=info, snapshot=ShapeRecorder(),
-                     to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a))
+                     to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a),
+                     conserved=pb.mechanical_energy, stability=stability(scene, pb))
     return sim
+
+
+#: Largest number of unknowns (12 n_ctrl) for which the guards compute the dense spectrum
+#: (n_ctrl = 125; ~1 s for the eigenvalues on one core).
+PROBE_MAX_UNKNOWNS = 1500
+
+REMEDY = ('try material.kelvin_voigt = "auto" (the least damping that removes growth at the start) or a larger '
+          'value, or another space.n_ctrl (docs/verification.md, "Stability maps")')
+
+
+def stability(scene: Scene, pb: BeamProblem) -> Stability:
+    """Guard hooks of a beam: power-iteration spectral radius, dense growth check (up to
+    :data:`PROBE_MAX_UNKNOWNS` unknowns), rest test."""
+    from ..integrators import growth_check, spectral_radius
+
+    kv = f", kelvin_voigt = {pb.tau:.3g} s" if pb.tau > 0 else ""
+    describe = (f"{pb.formulation} collocation, p={scene['space.degree']}, n_ctrl={scene['space.n_ctrl']}{kv}")
+
+    def growth(t, y, duration):
+        if 12 * pb.n > PROBE_MAX_UNKNOWNS:
+            return None
+        return growth_check(pb, t, y, duration)
+
+    def at_rest(y):
+        return not (np.any(y.v) or np.any(y.w))
+
+    return Stability(describe=describe, remedy=REMEDY, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
+                     growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS)
 
 
 KIND = register_kind(ProblemKind(

@@ -38,6 +38,15 @@ class OutputSpec:
 
 
 @dataclass(frozen=True)
+class GuardSpec:
+    """``[guard]``: checks before and during a run (liegroup_int/guards.py)."""
+
+    dt: bool = True
+    spectrum: bool = True
+    energy_balance: float = 0.5
+
+
+@dataclass(frozen=True)
 class Scene:
     """A validated scene.
 
@@ -66,9 +75,39 @@ class Scene:
     output: OutputSpec
     params: Mapping[str, Any] = field(repr=False)
     raw: Mapping[str, Any] = field(repr=False)
+    guard: GuardSpec = field(default_factory=GuardSpec)
 
     def __getitem__(self, key: str):
         return self.params[key]
+
+
+@dataclass(frozen=True)
+class Stability:
+    """What a problem kind offers the run guards (liegroup_int/guards.py).
+
+    Attributes
+    ----------
+    describe : str
+        The discretization in a few words, for messages ("mixed collocation, p=4, n_ctrl=31").
+    remedy : str
+        What to try when a mode of the discretization grows.
+    spectral_radius : callable
+        ``(t, y) -> |lambda|max`` of the linearized problem (cheap: power iteration).
+    growth : callable
+        ``(t, y, duration) -> GrowthReport`` from the dense spectrum, or ``None`` when the
+        problem has more than ``max_unknowns`` unknowns.
+    at_rest : callable
+        ``y -> bool``: the state does not move (its spectrum should then be imaginary).
+    max_unknowns : int
+        Largest problem for which ``growth`` computes the dense spectrum.
+    """
+
+    describe: str
+    remedy: str
+    spectral_radius: Callable[[float, Any], float]
+    growth: Callable[[float, Any, float], Any]
+    at_rest: Callable[[Any], bool]
+    max_unknowns: int
 
 
 @dataclass
@@ -85,6 +124,11 @@ class Simulation:
         ``fn(y) -> dict`` of named, JSON-ready fields.
     info : dict
         Extra JSON-ready facts for summary.json (discretization, stable step, ...).
+    conserved : callable, optional
+        ``E(y)`` whose change equals the problem's quadrature (beams: kinetic plus strain
+        energy, whose change is the work of the loads): the energy balance.
+    stability : Stability, optional
+        Hooks of the run guards (stable step, spectrum probe, failure diagnosis).
     """
 
     problem: Any
@@ -95,6 +139,8 @@ class Simulation:
     snapshot: Callable[[Any], dict] | None = None
     to_arrays: Callable[[Any], dict] = lambda y: {"y": y}
     from_arrays: Callable[[dict], Any] = lambda a: a["y"]
+    conserved: Callable[[Any], float] | None = None
+    stability: Stability | None = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +174,13 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
             "", non_negative),
         Key("output.paraview", "bool", True, "beams: write a VTU file per output time and the index beam.pvd"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
+        Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
+        Key("guard.spectrum", "bool", True,
+            "refuse a discretization with a growing linearized mode at rest (dense spectrum at the start; "
+            "small problems)"),
+        Key("guard.energy_balance", "float", 0.5,
+            "stop when |E_kin + E_strain - W - E0| exceeds this fraction of the energy scale (0: off)", "",
+            non_negative),
     ]
     return {k.name: k for k in keys}
 
@@ -177,6 +230,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
                           v["output.paraview"], v["output.blowup_factor"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
+        guard=GuardSpec(v["guard.dt"], v["guard.spectrum"], v["guard.energy_balance"]),
     )
     if kind.check is not None:
         kind.check(scene)

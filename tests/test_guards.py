@@ -1,0 +1,99 @@
+"""Run guards: a dt beyond the stable step, a spurious growing mode at rest, the energy
+balance, and failure diagnoses that name the real cause (liegroup_int/guards.py)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from liegroup_int.cli import main
+from liegroup_int.guards import EnergyBalance, BalanceError
+from liegroup_int.integrators import Stats
+from liegroup_int.io import read_history
+
+
+def _run(capsys, *args):
+    rc = main(["run", *args, "--quiet"])
+    return rc, capsys.readouterr().err
+
+
+def test_dt_beyond_the_stable_step_of_a_finer_mesh_is_refused(tmp_path, capsys):
+    # the paper's pendulum dt = 5e-5 s is stable at n_ctrl = 31 (|lambda| dt = 1.56) but
+    # not at n_ctrl = 61 (|lambda|max = 5.8e4 1/s: 2.9 > 2.83, RK4's limit)
+    out = tmp_path / "p61"
+    rc, err = _run(capsys, "pendulum", "--out", str(out), "--set", "space.n_ctrl=61")
+    assert rc == 2 and err.count("\n") == 1
+    assert "key 'integrator.dt' = 5e-05 s is beyond the stable step" in err and "n_ctrl=61" in err
+    stable = float(err.split("the stable step ")[1].split(" s")[0])
+    assert 4.5e-5 < stable < 5e-5  # 2.83 / 5.8e4
+    assert not out.exists()  # nothing was started, nothing written
+
+
+def test_spurious_growing_mode_at_rest_is_refused(tmp_path, capsys):
+    # primal collocation, cantilever p = 8, n_ctrl = 11: a complex pair with
+    # Re lambda = +9.0e3 1/s at rest (docs/verification.md, stability map)
+    out = tmp_path / "p8"
+    rc, err = _run(capsys, "cantilever", "--out", str(out), "--set", "space.degree=8", "--set", "space.n_ctrl=11")
+    assert rc == 2 and err.count("\n") == 1
+    assert "spurious growing mode of this discretization (primal collocation, p=8, n_ctrl=11)" in err
+    assert "kelvin_voigt" in err and "whatever dt" in err
+    assert not out.exists()
+
+
+def test_kelvin_voigt_auto_removes_the_growth_and_reports_it(tmp_path, capsys):
+    out = tmp_path / "p8kv"
+    rc, err = _run(capsys, "cantilever", "--out", str(out), "--set", "space.degree=8", "--set", "space.n_ctrl=11",
+                   "--set", "material.kelvin_voigt=auto", "--set", "t_end=2e-3", "--set", "integrator.dt=auto")
+    assert rc == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    kv = s["kelvin_voigt_auto"]
+    assert kv["max_real_undamped"] > 1e3 and kv["max_real"] <= 1e-2
+    # the offending pair sits low in the spectrum (|Im| = 1e5 of |lambda|max 1.3e6), so the
+    # least tau is comparatively large: measured 2.1e-4 s, a damping ratio 5.5e-3 on mode 1
+    assert 0 < kv["tau"] < 1e-3 and kv["zeta1"] < 1e-2
+    assert s["discretization"]["kelvin_voigt"] == kv["tau"]
+    assert s["guards"]["max_re_lambda"] <= 1e-2  # the start probe saw no growth
+
+
+def test_energy_balance_breaks_when_a_spurious_mode_grows(tmp_path, capsys):
+    # the same discretization run anyway: the growing pair feeds energy that no load
+    # supplied; the balance guard stops the run and the diagnosis names the pair
+    out = tmp_path / "grow"
+    rc, err = _run(capsys, "cantilever", "--out", str(out), "--set", "space.degree=8", "--set", "space.n_ctrl=11",
+                   "--set", "guard.spectrum=false", "--set", "integrator.dt=auto", "--set", "output.paraview=false",
+                   "--set", 'output.quantities=["tip","energy_balance","work"]')
+    assert rc == 3 and err.count("\n") == 1
+    assert "energy balance broken" in err and "spurious growing mode" in err and "complex pair" in err
+    assert "reduce dt" not in err  # not a step-size problem
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "failed" and s["energy_balance"]["worst_fraction"] > 0.5
+    h = read_history(out / "history.csv")
+    assert abs(h["energy_balance"][-1]) > 0.5 * np.max(np.abs(h["work"]))  # the failing row is on disk
+    assert h["t"][-1] == pytest.approx(s["t_reached"])
+
+
+def test_energy_balance_closes_on_a_resolved_run(tmp_path, capsys):
+    # pendulum (gravity only), 0.2 s: the balance is a space error, 0.66 % of the
+    # kinetic energy at n_ctrl = 31 over 1 s (measured); well under the 50 % guard
+    out = tmp_path / "pend"
+    rc, err = _run(capsys, "pendulum", "--out", str(out), "--set", "t_end=0.2", "--set", "output.paraview=false",
+                   "--set", 'output.quantities=["tip","energy_balance","work"]')
+    assert rc == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    assert s["energy_balance"]["worst_fraction"] < 1e-2
+    assert s["energy_balance"]["work"] > 0.1  # gravity did work
+
+
+def test_energy_balance_unit():
+    stats = Stats()
+    bal = EnergyBalance(lambda y: y, stats, e0=1.0, tolerance=0.5)
+    stats.quadrature = 2.0
+    bal(0.1, 3.0)  # E - W - E0 = 0
+    assert bal.defect == 0.0 and bal.scale == 3.0
+    with pytest.raises(BalanceError, match="energy balance broken at t=0.2"):
+        bal(0.2, 7.0)  # defect 4 of scale 7
+    bal2 = EnergyBalance(lambda y: y, Stats(), e0=0.0, tolerance=0.0)
+    bal2(0.1, 10.0)  # tolerance 0: records, never stops
+    assert bal2.worst == 1.0
+    with pytest.raises(BalanceError):
+        bal2(0.2, np.nan)  # non-finite always stops
