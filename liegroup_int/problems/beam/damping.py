@@ -8,6 +8,11 @@ removes that mode's growth (the rule of thumb). :func:`size_kelvin_voigt` starts
 and checks each candidate on the dense linearized spectrum, doubling until no mode grows,
 then narrows the bracket, so the damping is the least that does it (to a factor
 ``2^(1/2^refine)``), and reports the damping ratio it puts on the first mode.
+
+Only oscillatory growth counts (``|Im lambda| > Re lambda``): the spurious modes of
+collocation are complex pairs high in the spectrum, on which the damping acts. Real or
+slow growth (a near-rigid mode, or about a moving state the physical divergence of
+nearby motions) is not something strain-rate damping removes, and is left alone.
 """
 
 from __future__ import annotations
@@ -31,11 +36,11 @@ class DampingReport:
     tau : float
         Retardation time chosen [s] (0 if no mode grows undamped).
     max_real_undamped : float
-        Largest ``Re(lambda)`` without damping [1/s].
+        Largest ``Re(lambda)`` of the oscillatory modes without damping [1/s].
     at_imag : float
         ``|Im(lambda)|`` of that mode [1/s].
     max_real : float
-        Largest ``Re(lambda)`` with ``tau`` [1/s].
+        Largest ``Re(lambda)`` of the oscillatory modes with ``tau`` [1/s].
     omega1 : float
         Smallest non-zero ``|Im(lambda)|`` [1/s] (the first mode).
     zeta1 : float
@@ -57,6 +62,13 @@ class DampingReport:
 
     def as_dict(self) -> dict:
         return {k: float(v) if k != "spectra" else int(v) for k, v in self.__dict__.items()}
+
+
+def oscillatory_growth(lam: np.ndarray) -> float:
+    """Largest ``Re lambda`` over the oscillatory modes (``|Im lambda| > Re lambda``),
+    ``-inf`` if there are none."""
+    osc = lam.real[np.abs(lam.imag) > lam.real]
+    return float(np.max(osc)) if osc.size else -np.inf
 
 
 def _first_frequency(lam: np.ndarray) -> float:
@@ -91,23 +103,24 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
     """
     lam0 = eigenvalues(with_tau(0.0), t, y)
     count = 1
-    k0 = int(np.argmax(lam0.real))
+    osc = np.abs(lam0.imag) > lam0.real
+    k0 = int(np.argmax(np.where(osc, lam0.real, -np.inf)))
     re0, im0 = float(lam0.real[k0]), float(abs(lam0.imag[k0]))
     omega1 = _first_frequency(lam0)
     if re0 <= threshold:
         return DampingReport(0.0, re0, im0, re0, omega1, 0.0, float(np.max(np.abs(lam0))), count)
-    grow = lam0[lam0.real > threshold]
+    grow = lam0[osc & (lam0.real > threshold)]
     tau = float(np.max(2.0 * grow.real / np.abs(grow) ** 2))  # rule of thumb, per growing mode
     lo = 0.0
     for _ in range(max_doublings):
         lam = eigenvalues(with_tau(tau), t, y)
         count += 1
-        if float(np.max(lam.real)) <= threshold:
+        if oscillatory_growth(lam) <= threshold:
             break
         lo, tau = tau, 2.0 * tau
     else:
         raise ValueError(f"no Kelvin-Voigt retardation time up to {tau:.3g} s removes the growing mode "
-                         f"(Re lambda = {re0:.3g} 1/s)")
+                         f"(Re lambda = {re0:.3g} 1/s at |Im lambda| = {im0:.3g} 1/s)")
     best = lam
     hi = tau
     if lo > 0.0:
@@ -115,9 +128,9 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
             mid = float(np.sqrt(lo * hi))
             lam = eigenvalues(with_tau(mid), t, y)
             count += 1
-            if float(np.max(lam.real)) <= threshold:
+            if oscillatory_growth(lam) <= threshold:
                 hi, best = mid, lam
             else:
                 lo = mid
-    return DampingReport(hi, re0, im0, float(np.max(best.real)), omega1, 0.5 * hi * omega1,
+    return DampingReport(hi, re0, im0, oscillatory_growth(best), omega1, 0.5 * hi * omega1,
                          float(np.max(np.abs(best))), count)

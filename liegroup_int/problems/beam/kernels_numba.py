@@ -561,6 +561,9 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
             kd0 = r00 * ws0 + r10 * ws1 + r20 * ws2
             kd1 = r01 * ws0 + r11 * ws1 + r21 * ws2
             kd2 = r02 * ws0 + r12 * ws1 + r22 * ws2
+            if power:  # viscous dissipation tau (dGamma . C_N dGamma + dK . C_M dK), per length
+                power_sum -= quad[i] * tau * (CN0 * gd0 * gd0 + CN1 * gd1 * gd1 + CN2 * gd2 * gd2
+                                              + CM0 * kd0 * kd0 + CM1 * kd1 * kd1 + CM2 * kd2 * kd2)
             g0, g1, g2 = _cross(k0, k1, k2, kd0, kd1, kd2)
             kds0 = r00 * wss0 + r10 * wss1 + r20 * wss2 - g0
             kds1 = r01 * wss0 + r11 * wss1 + r21 * wss2 - g1
@@ -711,12 +714,21 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
                 wc2 += b0 * w[j, 2]
             h0, h1, h2 = _cross(wc0, wc1, wc2, cs0, cs1, cs2)
             h0, h1, h2 = vs0 - h0, vs1 - h1, vs2 - h2
-            ga0 += tau * (r00 * h0 + r10 * h1 + r20 * h2)
-            ga1 += tau * (r01 * h0 + r11 * h1 + r21 * h2)
-            ga2 += tau * (r02 * h0 + r12 * h1 + r22 * h2)
-            km0 += tau * (r00 * ws0 + r10 * ws1 + r20 * ws2)
-            km1 += tau * (r01 * ws0 + r11 * ws1 + r21 * ws2)
-            km2 += tau * (r02 * ws0 + r12 * ws1 + r22 * ws2)
+            gd0 = r00 * h0 + r10 * h1 + r20 * h2
+            gd1 = r01 * h0 + r11 * h1 + r21 * h2
+            gd2 = r02 * h0 + r12 * h1 + r22 * h2
+            kd0 = r00 * ws0 + r10 * ws1 + r20 * ws2
+            kd1 = r01 * ws0 + r11 * ws1 + r21 * ws2
+            kd2 = r02 * ws0 + r12 * ws1 + r22 * ws2
+            ga0 += tau * gd0
+            ga1 += tau * gd1
+            ga2 += tau * gd2
+            km0 += tau * kd0
+            km1 += tau * kd1
+            km2 += tau * kd2
+            if power:  # viscous dissipation tau (dGamma . C_N dGamma + dK . C_M dK), per length
+                power_sum -= quad[i] * tau * (CN0 * gd0 * gd0 + CN1 * gd1 * gd1 + CN2 * gd2 * gd2
+                                              + CM0 * kd0 * kd0 + CM1 * kd1 * kd1 + CM2 * kd2 * kd2)
         N0_, N1_, N2_ = CN0 * ga0, CN1 * ga1, CN2 * ga2
         M0_, M1_, M2_ = CM0 * km0, CM1 * km1, CM2 * km2
         x[i, _X_NM] = r00 * N0_ + r01 * N1_ + r02 * N2_

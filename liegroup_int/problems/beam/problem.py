@@ -158,8 +158,9 @@ class BeamProblem(Problem):
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
-        # loads that do work: the drivers then integrate their power (quadrature_rate)
-        self.has_quadrature = bool(self.has_q or self.has_m or any(
+        # loads that do work, or viscous dissipation: the drivers then integrate their
+        # power (quadrature_rate)
+        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
             for e in self.neumann_ends))
         # --- backend selection (compiled kernels: kernels_numba.py) -------------------
@@ -370,17 +371,22 @@ class BeamProblem(Problem):
         return gam + tau * gd, gam_s + tau * gd_s, KM + tau * kd, KM_s + tau * kd_s
 
     def quadrature_rate(self, t: float, y: BeamState) -> float:
-        """Power of the external loads [W] at ``(t, y)``: the drivers integrate it into
-        their work ``W(t)`` (:attr:`Stats.quadrature`), so ``E_kin + E_strain - W`` is
-        conserved up to time and space error (:meth:`energy_balance`).
+        """Power of the external loads minus the viscous dissipation [W] at ``(t, y)``:
+        the drivers integrate it into ``W(t)`` (:attr:`Stats.quadrature`), so
+        ``E_kin + E_strain - W`` is conserved up to time and space error (the energy
+        balance of the run guards).
 
-        ``P = f_d(t) int (q . v + m_d . omega) ds + sum_ends (F(t) . v + M(t) . omega)``
+        ``P = f_d(t) int (q . v + m_d . omega) ds + sum_ends (F(t) . v + M(t) . omega)
+        - tau int (dGamma . C_N dGamma + dK . C_M dK) ds``
         with the distributed force ``q`` (gravity included) and couple ``m_d``, their
-        profile ``f_d``, the dead end forces ``F`` and couples ``M`` at Neumann ends, and
-        spatial velocities; ``int ds`` by the collocation quadrature (exact on the
-        trial space).
+        profile ``f_d``, the dead end forces ``F`` and couples ``M`` at Neumann ends,
+        spatial velocities, and the Kelvin-Voigt strain rates; ``int ds`` by the
+        collocation quadrature (exact on the trial space).
         """
         p = 0.0
+        if self.tau > 0.0:
+            gd, kd = strain_rates(y.R, self.N1 @ y.c, self.N1 @ y.v, self.N0 @ y.w, self.N1 @ y.w)
+            p -= self.tau * float(self.quad @ (np.sum(self.CN * gd**2, axis=1) + np.sum(self.CM * kd**2, axis=1)))
         if self.has_q or self.has_m:
             f = self.loads.distributed_profile(t)
             if self.has_q:
