@@ -120,6 +120,10 @@ def _spectrum(scene) -> int:
     except ValueError as exc:
         print(f"error: {scene.source}: {exc}", file=sys.stderr)
         return 2
+    kv = sim.info.get("kelvin_voigt_auto")
+    if kv is not None:
+        print(f"kelvin_voigt = auto: tau = {kv['tau']:.3g} s (undamped max Re lambda = {kv['max_real_undamped']:.3g} "
+              f"1/s at |Im| = {kv['at_imag']:.4g} 1/s; damping ratio on mode 1: {kv['zeta1']:.2g})")
     print(f"spectrum at t=0 ({rep.size} unknowns): |lambda|max = {rep.lam_max:.4g} 1/s, "
           f"max Re lambda = {rep.max_real:.3g} 1/s (at |Im| = {rep.at_imag:.4g} 1/s)")
     if rep.lam_max > 0:
@@ -130,9 +134,9 @@ def _spectrum(scene) -> int:
         print(f"warning: {scene.source}: a linearized mode grows like exp({rep.max_real:.3g} t) "
               f"({rep.max_real * scene.t_end:.3g} e-folds over t_end = {scene.t_end:g} s). About a state at rest an "
               "undamped structure has a purely imaginary spectrum, so such a mode is a spurious instability of the "
-              "discretization and the run will blow up whatever dt (docs/verification.md, 'Stability of the "
-              "semi-discretization'; for beams try another n_ctrl or material.kelvin_voigt); about a moving "
-              "state it may be the physical divergence of nearby trajectories", file=sys.stderr)
+              "discretization and the run will blow up whatever dt (docs/verification.md, 'Stability maps'; for "
+              "beams try material.kelvin_voigt = \"auto\" or another n_ctrl); about a moving state it may be the "
+              "physical divergence of nearby trajectories", file=sys.stderr)
     return 0
 
 

@@ -78,6 +78,10 @@ def check_step(scene: Scene, stab, tab, dt: float, t0: float, y0) -> dict:
 def check_growth(scene: Scene, stab, t0: float, y0) -> tuple[dict, str | None]:
     """Dense spectrum at ``(t0, y0)``: ``(facts, warning)``; raises SceneError for a mode
     that grows over the run about a state at rest."""
+    if stab.sized is not None:  # damping sized on the same spectrum: its growth is removed
+        rep = stab.sized
+        return {"probe": "spectrum of the damping sizing (kelvin_voigt = auto)",
+                "max_re_lambda": rep.max_real, "lambda_max_dense": rep.lam_max}, None
     rep = stab.growth(t0, y0, scene.t_end - t0)
     if rep is None:
         return {"probe": f"skipped (more than {stab.max_unknowns} unknowns)"}, None

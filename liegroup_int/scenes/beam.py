@@ -200,13 +200,14 @@ def _end_load(scene: Scene, end: str) -> EndLoad:
     return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof)
 
 
-def problem(scene: Scene, size_damping: bool = True) -> BeamProblem:
+def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:
     """The :class:`BeamProblem` of a validated beam scene.
 
-    With ``material.kelvin_voigt = "auto"`` the retardation time is sized from the dense
-    linearized spectrum at the initial state (:func:`~liegroup_int.problems.beam.damping.
-    size_kelvin_voigt`) and the report kept as ``damping_report``; ``size_damping=False``
-    builds the undamped problem without that cost (scene checks).
+    With ``material.kelvin_voigt = "auto"`` and ``size_damping=True`` (what a run does,
+    :func:`build`) the retardation time is sized from the dense linearized spectrum at the
+    initial state (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`) and the
+    report kept as ``damping_report``; without it the problem is built undamped, at no
+    cost (scene checks, tests).
     """
     curve = geometry(scene)
     a = scene["geometry.reference_vector"]
@@ -290,7 +291,7 @@ def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
 
 
 def build(scene: Scene) -> Simulation:
-    pb = problem(scene)
+    pb = problem(scene, size_damping=True)
     y0 = pb.initial_state()
 
     def final_state(y):
@@ -342,7 +343,7 @@ def stability(scene: Scene, pb: BeamProblem) -> Stability:
         return not (np.any(y.v) or np.any(y.w))
 
     return Stability(describe=describe, remedy=REMEDY, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
-                     growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS)
+                     growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS, sized=pb.damping_report)
 
 
 KIND = register_kind(ProblemKind(

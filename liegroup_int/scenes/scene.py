@@ -100,6 +100,9 @@ class Stability:
         ``y -> bool``: the state does not move (its spectrum should then be imaginary).
     max_unknowns : int
         Largest problem for which ``growth`` computes the dense spectrum.
+    sized : object, optional
+        A report of damping sized on the dense spectrum at the start (beams:
+        ``DampingReport``); the start probe then reuses it instead of recomputing.
     """
 
     describe: str
@@ -108,6 +111,7 @@ class Stability:
     growth: Callable[[float, Any, float], Any]
     at_rest: Callable[[Any], bool]
     max_unknowns: int
+    sized: Any = None
 
 
 @dataclass
