@@ -45,6 +45,8 @@ def _save(cache):
 
 
 def _cell(e: dict) -> str:
+    if e.get("note", "").startswith("refused"):
+        return "refused"
     if e.get("note"):
         return "fail"
     r = e["max_real"]
@@ -128,9 +130,11 @@ def main(argv=None):
                                 _save(cache)
                             entries.append(cache[key])
                     grow = sum(1 for e in entries if not e.get("note") and e["max_real"] > 1e-2)
-                    fails = sum(1 for e in entries if e.get("note"))
+                    refused = sum(1 for e in entries if e.get("note", "").startswith("refused"))
+                    fails = sum(1 for e in entries if e.get("note")) - refused
                     title = f"{scene}, {state}, {form}, damping {damping}"
                     print(f"\n### {title}: {grow} of {len(entries)} growing (max Re lambda > 1e-2 1/s)"
+                          + (f", {refused} refused by the damping sizing" if refused else "")
                           + (f", {fails} not reached" if fails else ""))
                     print(table(entries, args.degrees, args.n, damping))
                     if not args.no_plots:

@@ -25,7 +25,8 @@ import math
 
 import numpy as np
 
-from .integrators import IntegrationError
+from .integrators import GrowthReport, IntegrationError
+from .integrators.spectrum import GROWTH_THRESHOLD
 from .integrators.stepsize import SAFETY
 from .scenes import Scene, SceneError
 from .tableaux import imaginary_axis_growth, imaginary_axis_limit
@@ -78,25 +79,30 @@ def check_step(scene: Scene, stab, tab, dt: float, t0: float, y0) -> dict:
 def check_growth(scene: Scene, stab, t0: float, y0) -> tuple[dict, str | None]:
     """Dense spectrum at ``(t0, y0)``: ``(facts, warning)``; raises SceneError for a mode
     that grows over the run about a state at rest."""
-    if stab.sized is not None:  # damping sized on the same spectrum: its growth is removed
-        rep = stab.sized
-        return {"probe": "spectrum of the damping sizing (kelvin_voigt = auto)",
-                "max_re_lambda": rep.max_real, "lambda_max_dense": rep.lam_max}, None
-    rep = stab.growth(t0, y0, scene.t_end - t0)
+    if stab.sized is not None:  # damping sized on the same spectrum: reuse it
+        d = stab.sized
+        rep = GrowthReport(d.lam_max, d.max_real_all, d.at_imag_all,
+                           bool(d.max_real_all > GROWTH_THRESHOLD and d.max_real_all * (scene.t_end - t0) > 1.0),
+                           0)
+        probe = "spectrum of the damping sizing (kelvin_voigt = auto)"
+    else:
+        rep = stab.growth(t0, y0, scene.t_end - t0)
+        probe = "dense spectrum at the start"
     if rep is None:
         return {"probe": f"skipped (more than {stab.max_unknowns} unknowns)"}, None
-    facts = {"probe": "dense spectrum at the start", "max_re_lambda": rep.max_real, "at_imag": rep.at_imag,
-             "lambda_max_dense": rep.lam_max}
+    facts = {"probe": probe, "max_re_lambda": rep.max_real, "at_imag": rep.at_imag, "lambda_max_dense": rep.lam_max}
     if not rep.growing:
         return facts, None
     e_folds = rep.max_real * (scene.t_end - t0)
     what = (f"mode growing like exp({rep.max_real:.3g} t) at |Im lambda| = {rep.at_imag:.4g} 1/s "
             f"({e_folds:.3g} e-folds over the run)")
     if stab.at_rest(y0):
+        oscillatory = rep.at_imag > rep.max_real
         raise SceneError(
             f"{scene.source}: spurious growing mode of this discretization ({stab.describe}): {what}; about a "
             f"state at rest an undamped structure has a purely imaginary spectrum, so the run would be garbage "
-            f"whatever dt: {stab.remedy} (or guard.spectrum = false to run anyway)")
+            f"whatever dt: {stab.remedy if oscillatory else stab.remedy_real} (or guard.spectrum = false to run "
+            f"anyway)")
     return facts, (f"{scene.source}: linearized {what} about the initial motion ({stab.describe}); part of it may "
                    f"be physical; if the run fails: {stab.remedy}")
 

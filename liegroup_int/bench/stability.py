@@ -103,7 +103,12 @@ def map_entry(scene: str, state: str, formulation: str, damping: str, p: int, n:
     pb = problem(sc)
     y0 = pb.initial_state()
     if damping == "auto":
-        rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+        try:
+            rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+        except ValueError as exc:  # refused: the growth needs more than light damping
+            e.note = f"refused: {exc}"[:200]
+            e.seconds = time.perf_counter() - start
+            return e
         e.tau, e.zeta1 = rep.tau, rep.zeta1
         pb = pb.with_kelvin_voigt(rep.tau)
     elif damping not in ("none", "0"):

@@ -98,6 +98,9 @@ class GrowthReport:
     size: int
 
 
+#: Real part [1/s] above which a linearized mode counts as growing (guards, damping sizing).
+GROWTH_THRESHOLD = 1e-2
+
 #: Largest increment size for which :func:`growth_check` forms the dense Jacobian.
 MAX_DENSE = 3000
 

@@ -235,7 +235,11 @@ def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:
         try:
             rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
         except ValueError as exc:
-            raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc}") from None
+            raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
+                             f"({pb.formulation} collocation, p={scene['space.degree']}, "
+                             f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
+                             + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
+                                else "") + ", or give an explicit retardation time") from None
         pb = pb.with_kelvin_voigt(rep.tau)
         pb.damping_report = rep
     return pb
@@ -342,7 +346,9 @@ def stability(scene: Scene, pb: BeamProblem) -> Stability:
     def at_rest(y):
         return not (np.any(y.v) or np.any(y.w))
 
-    return Stability(describe=describe, remedy=REMEDY, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
+    remedy_real = ("strain-rate damping does not act on a real mode: try another space.degree or space.n_ctrl"
+                   + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal" else ""))
+    return Stability(describe=describe, remedy=REMEDY, remedy_real=remedy_real, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
                      growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS, sized=pb.damping_report)
 
 

@@ -90,7 +90,10 @@ class Stability:
     describe : str
         The discretization in a few words, for messages ("mixed collocation, p=4, n_ctrl=31").
     remedy : str
-        What to try when a mode of the discretization grows.
+        What to try when an oscillatory mode of the discretization grows.
+    remedy_real : str
+        What to try when a real (non-oscillatory) mode grows at rest, which damping does
+        not remove.
     spectral_radius : callable
         ``(t, y) -> |lambda|max`` of the linearized problem (cheap: power iteration).
     growth : callable
@@ -107,6 +110,7 @@ class Stability:
 
     describe: str
     remedy: str
+    remedy_real: str
     spectral_radius: Callable[[float, Any], float]
     growth: Callable[[float, Any, float], Any]
     at_rest: Callable[[Any], bool]

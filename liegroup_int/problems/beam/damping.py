@@ -21,10 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...integrators.spectrum import eigenvalues
-
-#: Real part [1/s] above which a linearized mode counts as growing.
-GROWTH_THRESHOLD = 1e-2
+from ...integrators.spectrum import GROWTH_THRESHOLD, eigenvalues
+#: Largest damping ratio on the first mode that ``"auto"`` accepts. Beyond it the growth
+#: is not a high-frequency artefact that light damping removes (measured: primal
+#: collocation of the arch at p = 2, locked, would need tau ~ 50 s; p = 8 with three
+#: elements ~ 0.02): the sizing refuses and says so.
+MAX_ZETA1 = 1e-3
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,9 @@ class DampingReport:
         Largest ``|lambda|`` with ``tau`` [1/s] (stable steps).
     spectra : int
         Dense spectra computed.
+    max_real_all, at_imag_all : float
+        Largest ``Re(lambda)`` over all modes with ``tau`` (real and slow ones included,
+        which the damping does not act on) and its ``|Im lambda|`` [1/s].
     """
 
     tau: float
@@ -59,6 +64,8 @@ class DampingReport:
     zeta1: float
     lam_max: float
     spectra: int
+    max_real_all: float = float("nan")
+    at_imag_all: float = float("nan")
 
     def as_dict(self) -> dict:
         return {k: float(v) if k != "spectra" else int(v) for k, v in self.__dict__.items()}
@@ -71,6 +78,11 @@ def oscillatory_growth(lam: np.ndarray) -> float:
     return float(np.max(osc)) if osc.size else -np.inf
 
 
+def _top(lam: np.ndarray) -> tuple[float, float]:
+    k = int(np.argmax(lam.real))
+    return float(lam.real[k]), float(abs(lam.imag[k]))
+
+
 def _first_frequency(lam: np.ndarray) -> float:
     im = np.abs(lam.imag)
     im = im[im > 1e-6 * max(1.0, float(np.max(np.abs(lam))))]
@@ -78,7 +90,7 @@ def _first_frequency(lam: np.ndarray) -> float:
 
 
 def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THRESHOLD, refine: int = 3,
-                      max_doublings: int = 40) -> DampingReport:
+                      max_doublings: int = 40, max_zeta1: float = MAX_ZETA1) -> DampingReport:
     """Least Kelvin-Voigt retardation time that leaves no growing linearized mode at ``y``.
 
     Parameters
@@ -96,6 +108,9 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
         Bisections (in ``log tau``) after the first ``tau`` that works.
     max_doublings : int
         Bound on the search; raises ``ValueError`` beyond it.
+    max_zeta1 : float
+        Largest damping ratio on the first mode accepted; raises ``ValueError`` (naming
+        the growth and the damping it would need) beyond it.
 
     Returns
     -------
@@ -108,11 +123,16 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
     re0, im0 = float(lam0.real[k0]), float(abs(lam0.imag[k0]))
     omega1 = _first_frequency(lam0)
     if re0 <= threshold:
-        return DampingReport(0.0, re0, im0, re0, omega1, 0.0, float(np.max(np.abs(lam0))), count)
+        return DampingReport(0.0, re0, im0, re0, omega1, 0.0, float(np.max(np.abs(lam0))), count, *_top(lam0))
     grow = lam0[osc & (lam0.real > threshold)]
     tau = float(np.max(2.0 * grow.real / np.abs(grow) ** 2))  # rule of thumb, per growing mode
     lo = 0.0
     for _ in range(max_doublings):
+        if omega1 > 0 and 0.5 * tau * omega1 > 2.0 * max_zeta1:
+            raise ValueError(
+                f"removing the growing mode (Re lambda = {re0:.3g} 1/s at |Im lambda| = {im0:.4g} 1/s) would take "
+                f"tau > {tau:.3g} s, a damping ratio above {0.5 * tau * omega1:.2g} on the first mode "
+                f"(auto accepts {max_zeta1:g}): not a high-frequency artefact")
         lam = eigenvalues(with_tau(tau), t, y)
         count += 1
         if oscillatory_growth(lam) <= threshold:
@@ -132,5 +152,10 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
                 hi, best = mid, lam
             else:
                 lo = mid
+    if omega1 > 0 and 0.5 * hi * omega1 > max_zeta1:
+        raise ValueError(
+            f"removing the growing mode (Re lambda = {re0:.3g} 1/s at |Im lambda| = {im0:.4g} 1/s) takes "
+            f"tau = {hi:.3g} s, a damping ratio of {0.5 * hi * omega1:.2g} on the first mode (auto accepts "
+            f"{max_zeta1:g}): not a high-frequency artefact")
     return DampingReport(hi, re0, im0, oscillatory_growth(best), omega1, 0.5 * hi * omega1,
-                         float(np.max(np.abs(best))), count)
+                         float(np.max(np.abs(best))), count, *_top(best))
