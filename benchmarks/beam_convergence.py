@@ -76,6 +76,10 @@ def _parse():
     ap.add_argument("--threads", default="1", help="BLAS threads")
     ap.add_argument("--stability-scan", default=None, metavar="SCENE",
                     help="only run the (slow) eigenvalue scan of SCENE over p and n_ctrl")
+    ap.add_argument("--formulation", default="primal", choices=("primal", "mixed"),
+                    help="beam formulation of the studied discretizations (references stay primal p=8)")
+    ap.add_argument("--degrees", type=int, nargs="*", default=None, help="space study: only these degrees")
+    ap.add_argument("--smooth-only", action="store_true", help="space study: only the smoothly ramped loads")
     return ap.parse_args()
 
 
@@ -98,6 +102,7 @@ from liegroup_int.scenes.beam import problem  # noqa: E402
 
 CLOCK = time.process_time
 OUT: list[str] = []
+FORMULATION = ARGS.formulation if ARGS is not None else "primal"
 
 
 def emit(line: str = "") -> None:
@@ -106,7 +111,7 @@ def emit(line: str = "") -> None:
 
 
 def make(scene: str, overrides: dict | None = None):
-    pb = problem(load_scene(scene, dict(overrides or {})))
+    pb = problem(load_scene(scene, {"space.formulation": FORMULATION, **dict(overrides or {})}))
     y0 = pb.initial_state()
     return pb, y0, spectral_radius(pb, 0.0, y0)
 
@@ -338,24 +343,27 @@ def growth_probe(scene: str, overrides: dict, T: float) -> float:
 def space_study(quick: bool) -> list:
     ns, ref_pn = (SPACE_NS_QUICK, SPACE_REF_QUICK) if quick else (SPACE_NS, SPACE_REF)
     cases = SPACE_CASES[::2] if quick else SPACE_CASES
+    if ARGS is not None and ARGS.smooth_only:
+        cases = [c for c in cases if "smooth" in c[1]]
     ug = np.linspace(0.0, 1.0, 201)
     out = []
     for scene, label, ov, T, method, ps in cases:
-        ps = SPACE_PS_QUICK if quick else ps
-        def solve(p, n, y=SPACE_Y):
-            pb, y0, lam = make(scene, {**ov, "space.degree": p, "space.n_ctrl": n})
+        ps = SPACE_PS_QUICK if quick else (ARGS.degrees if ARGS is not None and ARGS.degrees else ps)
+        def solve(p, n, y=SPACE_Y, formulation=None):
+            extra = {} if formulation is None else {"space.formulation": formulation}
+            pb, y0, lam = make(scene, {**ov, "space.degree": p, "space.n_ctrl": n, **extra})
             N, h = steps_for(T, lam, y)
             yT, cpu, _ = run(pb, y0, method, T, h)
             return pb.centreline(yT, ug) - pb.centreline(y0, ug), cpu, lam, N
 
-        u_r, cpu_ref, lam_ref, N_ref = solve(*ref_pn)
+        u_r, cpu_ref, lam_ref, N_ref = solve(*ref_pn, formulation="primal")
         nr = np.linalg.norm(u_r)
         # time-error check (step y vs y/2) on the highest degree at n_ctrl = 41
         pc, nc = max(ps), (41 if 41 in ns else ns[-1])
         u_a, _, _, _ = solve(pc, nc)
         u_b, cpu_b, _, _ = solve(pc, nc, SPACE_Y / 2)
         terr = np.linalg.norm(u_a - u_b) / nr
-        emit(f"### {scene}, {label}: T = {T:g} s")
+        emit(f"### {scene}, {label}: T = {T:g} s ({FORMULATION} collocation)")
         emit()
         emit(f"{method.upper()} at |lambda|max h = {SPACE_Y} of each discretization. Reference p = {ref_pn[0]}, "
              f"n_ctrl = {ref_pn[1]} (|lambda|max = {lam_ref:.3g} 1/s, {N_ref} steps, {cpu_ref:.1f} s CPU), "
