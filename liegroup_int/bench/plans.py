@@ -1,13 +1,16 @@
 """What a work-precision benchmark runs: frozen plans, one per built-in beam scene.
 
 A plan fixes the span, the output grid on which tip histories are compared, the reference
-run (RKMK6 on a finer discretization), our runs and the peer's resolutions. Our runs are of
-two kinds: every method at its stable step on every discretization (their error against the
-fine reference is mostly space error, the fair comparison with a peer), and a time study on
-one discretization (the paper's p = 4, n = 30): every method over fractions of its stable
-step and the adaptive pairs over tolerances, whose *time* error is also measured against an
-RKMK6 run on that same discretization (the paper's Fig. 4(b), 5(b)). ``quick`` plans are the same studies on short spans and coarse
-ladders (a minute, for tests and smoke runs).
+run (RKMK6 on a finer discretization, primal collocation), our runs and the peer's
+resolutions. Our runs are of two kinds: every method at its stable step on every
+discretization, once per spatial formulation (``primal``: the paper's collocation;
+``mixed``: locking-free mixed collocation, with the least Kelvin-Voigt damping that
+removes its growing linearized modes at rest), whose error against the fine reference is
+mostly space error, the fair comparison with a peer; and a time study on one primal
+discretization (the paper's p = 4, n = 30): every method over fractions of its stable step
+and the adaptive pairs over tolerances, whose *time* error is also measured against an
+RKMK6 run on that same discretization (the paper's Fig. 4(b), 5(b)). ``quick`` plans are
+the same studies on short spans and coarse ladders (a minute, for tests and smoke runs).
 """
 
 from __future__ import annotations
@@ -31,8 +34,13 @@ class Plan:
         ``|lambda|max * dt`` of the reference run (capped by RKMK6's growth-budget rule).
     discretizations : tuple of (int, int)
         ``(degree, n_ctrl)`` of our runs at each method's stable step.
+    formulations : tuple of str
+        Spatial formulations of those runs (``"primal"``, ``"mixed"``; ``space.formulation``).
+        Primal runs are undamped; mixed runs carry the Kelvin-Voigt damping sized from the
+        dense spectrum at rest (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`).
+        The reference and the time study are primal whatever this says.
     time_study : (int, int)
-        ``(degree, n_ctrl)`` of the time study.
+        ``(degree, n_ctrl)`` of the time study (primal).
     methods : tuple of str
         Fixed-step methods.
     dt_fractions : tuple of float
@@ -55,6 +63,7 @@ class Plan:
     reference: tuple[int, int]
     reference_y: float
     discretizations: tuple[tuple[int, int], ...]
+    formulations: tuple[str, ...] = ("primal", "mixed")
     time_study: tuple[int, int] = (4, 31)
     methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65")
     dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
@@ -71,14 +80,23 @@ class Plan:
             raise ValueError(f"plan {self.scene}: every={self.every} must divide t_end={self.t_end}")
         if not self.discretizations:
             raise ValueError(f"plan {self.scene}: no discretizations")
+        from ..problems.beam.problem import FORMULATIONS
+
+        if not self.formulations or any(f not in FORMULATIONS for f in self.formulations) \
+                or len(set(self.formulations)) != len(self.formulations):
+            raise ValueError(f"plan {self.scene}: formulations must be distinct, from {', '.join(FORMULATIONS)}; "
+                             f"got {self.formulations}")
         if not all(0 < f <= 1 for f in self.dt_fractions):
             raise ValueError(f"plan {self.scene}: dt_fractions must lie in (0, 1], got {self.dt_fractions}")
 
 
 #: Built-in plans (the issue's scenes: cantilever over 0.05 s, pendulum over 1 s). Every
-#: discretization here is stable at rest (max Re lambda of the linearized operator < 1e-3
-#: 1/s); some nearby ones are not (cantilever p = 8, n_ctrl = 61 or 71: +1e4 1/s; see
-#: docs/verification.md, "Stability of the semi-discretization").
+#: discretization here is stable at rest in primal collocation (max Re lambda of the
+#: linearized operator < 1e-3 1/s); some nearby ones are not (cantilever p = 8, n_ctrl = 61
+#: or 71: +1e4 1/s; see docs/verification.md, "Stability of the semi-discretization"). Mixed
+#: collocation mostly has a weakly growing pair (1 to 1e3 1/s), removed by damping with
+#: tau of 1e-9 to 1e-6 s (zeta1 < 1e-5), except pendulum p = 8, n_ctrl = 41: tau = 1.1e-4 s,
+#: whose viscous eigenvalue sets |lambda|max (5.2e5 against 6.9e4 1/s undamped).
 PLANS: dict[str, Plan] = {
     "cantilever": Plan(
         scene="cantilever", t_end=0.05, every=2.5e-4, reference=(8, 51), reference_y=0.4,

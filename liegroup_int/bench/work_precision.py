@@ -2,10 +2,16 @@
 
 For a :class:`~liegroup_int.bench.plans.Plan`:
 
-1. The reference: RKMK6 on ``plan.reference`` at ``|lambda|max dt = plan.reference_y``.
-2. Our runs: every discretization x fixed-step method x fraction of that method's stable
-   step (:func:`~liegroup_int.integrators.stable_step` on the spectral radius at the
-   initial state), and every embedded pair x tolerance (step capped by the stable step).
+1. The reference: RKMK6 on ``plan.reference`` (primal collocation) at
+   ``|lambda|max dt = plan.reference_y``.
+2. Our runs: every formulation x discretization x fixed-step method at that method's
+   stable step (:func:`~liegroup_int.integrators.stable_step` on the spectral radius at
+   the initial state); on the primal time-study discretization every method over fractions
+   of its stable step and every embedded pair x tolerance (step capped by the stable step).
+   Primal runs are undamped; mixed runs carry the least Kelvin-Voigt damping that leaves
+   no growing linearized mode at rest
+   (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`, its ``tau`` reported per
+   discretization), and their stable step is taken on the damped spectrum.
 3. The peer: PyElastica ``PositionVerlet`` at each element count, at the largest step of a
    ladder that stays finite over the span (its "own stable dt"); optionally its
    discretization of our continuum model at the finest count.
@@ -17,10 +23,11 @@ recording costs the same in both. Every finished run is cached in ``out/runs/`` 
 reused by the next call with the same settings, so an interrupted benchmark continues
 where it stopped (``fresh=True`` recomputes).
 
-Ratios against each peer run with error ``e_p`` and CPU ``t_p``: *CPU ratio* =
-``t_p`` over the CPU of our cheapest run with error <= ``e_p``; *accuracy ratio* =
-``e_p`` over the error of our most accurate run with CPU <= ``t_p``. Both are given for
-PyElastica's own rod model and for its discretization of our continuum model.
+Ratios against each peer run with error ``e_p`` and CPU ``t_p``, for each formulation of
+ours: *CPU ratio* = ``t_p`` over the CPU of our cheapest run of that formulation with
+error <= ``e_p``; *accuracy ratio* = ``e_p`` over the error of our most accurate run of
+that formulation with CPU <= ``t_p``. Both are given for PyElastica's own rod model and
+for its discretization of our continuum model.
 """
 
 from __future__ import annotations
@@ -45,6 +52,7 @@ from ..integrators import (
     spectral_radius,
     stable_step,
 )
+from ..problems.beam.damping import size_kelvin_voigt
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
 from .plans import Plan
@@ -58,13 +66,17 @@ class Run:
     """One timed run and its tip history.
 
     ``family`` groups runs in tables and plots ("RKMK4", "RKMK65 adaptive",
-    "PyElastica"); ``resolution`` is ``"p4 n31"`` or ``"400 el"``; ``status`` is ``"ok"``,
-    ``"skipped"`` (predicted CPU over budget) or the one-line failure.
+    "PyElastica"); ``resolution`` is ``"p4 n31"`` or ``"400 el"``; ``formulation`` is
+    ``"primal"`` or ``"mixed"`` for ours (None for the peer), ``kelvin_voigt`` the
+    retardation time of the run [s]; ``status`` is ``"ok"``, ``"skipped"`` (predicted CPU
+    over budget) or the one-line failure.
     """
 
     family: str
     resolution: str
     dt: float
+    formulation: str | None = None
+    kelvin_voigt: float = 0.0
     rtol: float | None = None
     steps: int = 0
     rejected: int = 0
@@ -107,11 +119,13 @@ def _store(cache: Path | None, key: str, run: Run) -> None:
 
 
 # ----------------------------------------------------------------------------- ours
-def _problem(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str):
-    # the scene's own step and output keys are replaced (the benchmark chooses its steps)
+def _problem(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str,
+             formulation: str = "primal"):
+    # the scene's own step and output keys are replaced (the benchmark chooses its steps);
+    # built without sizing ``kelvin_voigt = "auto"`` (undamped; :func:`prepare` sizes mixed)
     return scene_problem(load_scene(scene, {"space.degree": degree, "space.n_ctrl": n_ctrl, "t_end": t_end,
                                             "output.every": every, "integrator.dt": every,
-                                            "integrator.backend": backend}))
+                                            "integrator.backend": backend, "space.formulation": formulation}))
 
 
 def fit_step(dt: float, every: float) -> float:
@@ -123,18 +137,41 @@ def fit_step(dt: float, every: float) -> float:
 class Discretized:
     """A built problem with its spectral radius, the largest real part of its linearized
     spectrum at the initial state (nan if too large for a dense eigenvalue problem) and
-    the measured cost per stage (CPU s)."""
+    the measured cost per stage (CPU s); for mixed collocation the damping report
+    (``damping``), or why the damping could not be sized (``refused``, and no problem)."""
 
     problem: object
     lam_max: float
     stage_cost_s: float
     max_real: float = math.nan
+    formulation: str = "primal"
+    damping: object = None
+    refused: str | None = None
+
+    @property
+    def tau(self) -> float:
+        """Kelvin-Voigt retardation time of the problem [s]."""
+        return 0.0 if self.problem is None else float(self.problem.tau)
 
 
-def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str) -> Discretized:
-    """Build, compile (warm-up steps), measure ``|lambda|max`` and the cost of a stage."""
-    pb = _problem(scene, degree, n_ctrl, t_end, every, backend)
+def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str,
+            formulation: str = "primal") -> Discretized:
+    """Build, compile (warm-up steps), measure ``|lambda|max`` and the cost of a stage.
+
+    ``formulation = "mixed"``: damped by :func:`size_kelvin_voigt` first (the spectral
+    radius, hence the stable steps, are those of the damped problem); if the sizing refuses
+    (the damping would be heavy), a :class:`Discretized` without problem saying why.
+    """
+    pb = _problem(scene, degree, n_ctrl, t_end, every, backend, formulation)
     y0 = pb.initial_state()
+    report = None
+    if formulation == "mixed":
+        try:
+            report = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+        except ValueError as exc:
+            return Discretized(None, math.nan, math.nan, formulation=formulation,
+                               refused=f"Kelvin-Voigt sizing refused: {exc}")
+        pb = pb.with_kelvin_voigt(report.tau)
     lam = spectral_radius(pb, 0.0, y0)
     tab = resolve_method("rkmk4")
     dt = 0.5 / lam
@@ -147,7 +184,7 @@ def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, ba
         max_real = growth_check(pb, 0.0, y0, t_end).max_real
     except ValueError:  # too many unknowns for the dense check
         max_real = math.nan
-    return Discretized(pb, lam, cost, max_real)
+    return Discretized(pb, lam, cost, max_real, formulation, report)
 
 
 def _record(pb, rec_t: list, rec_tip: list) -> Callable:
@@ -165,11 +202,16 @@ def run_fixed(d: Discretized, method: str, dt: float, t_end: float, every: float
     steps = int(round(t_end / dt))
     predicted = steps * tab.stages * d.stage_cost_s
     if predicted > budget_s:
-        return Run(family, resolution, dt, steps=steps, status=f"skipped (predicted {predicted:.0f} s CPU)")
+        return Run(family, resolution, dt, d.formulation, d.tau, steps=steps,
+                   status=f"skipped (predicted {predicted:.0f} s CPU)")
     pb = d.problem
     rec_t, rec_tip = [], []
     t_out = every * np.arange(1, int(round(t_end / every)) + 1)
-    run = Run(family, resolution, dt)
+    run = Run(family, resolution, dt, d.formulation, d.tau)
+    try:  # untimed: compiles whatever this method needs that the warm-up of prepare did not
+        integrate_fixed(pb, tab, (0.0, 2 * dt), pb.initial_state(), dt)
+    except IntegrationError:
+        pass
     c0 = time.process_time()
     try:
         _, _, stats = integrate_fixed(pb, tab, (0.0, t_end), pb.initial_state(), dt,
@@ -198,7 +240,12 @@ def run_adaptive(d: Discretized, method: str, rtol: float, h_max: float, t_end: 
     pb = d.problem
     rec_t, rec_tip = [], []
     t_out = every * np.arange(1, int(round(t_end / every)) + 1)
-    run = Run(f"{method.upper()} adaptive", resolution, h_max, rtol=rtol)
+    run = Run(f"{method.upper()} adaptive", resolution, h_max, d.formulation, d.tau, rtol=rtol)
+    try:  # untimed, one output interval: compiles the adaptive loop (seconds with a cold numba cache)
+        integrate_adaptive(pb, tab, (0.0, every), pb.initial_state(), rtol=rtol, atol=1e-3 * rtol, t_out=[every],
+                           h_max=h_max)
+    except IntegrationError:
+        pass
     c0 = time.process_time()
     record = _record(pb, rec_t, rec_tip)
 
@@ -265,28 +312,35 @@ def tip_error(run: Run, ref: Run) -> float:
     return float(np.max(np.linalg.norm(run.tip - ref.tip, axis=1)))
 
 
+def _label(r: Run) -> str:
+    return f"{r.family} {r.resolution} dt={r.dt:.3g}" + ("" if r.rtol is None else f" rtol={r.rtol:g}")
+
+
 def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
-    """CPU and accuracy ratios of our runs against each finished peer run (module doc)."""
+    """CPU and accuracy ratios of our runs against each finished peer run (module doc):
+    one entry per peer run and formulation of ours (in the order of ``ours``)."""
     mine = [r for r in ours if r.status == "ok" and np.isfinite(r.error)]
+    formulations = list(dict.fromkeys(r.formulation for r in mine))
     out = []
     for p in peers:
         if p.status != "ok" or not np.isfinite(p.error):
             continue
-        as_good = [r for r in mine if r.error <= p.error]
-        cheap = min(as_good, key=lambda r: r.cpu_s) if as_good else None
-        within = [r for r in mine if r.cpu_s <= p.cpu_s]
-        best = min(within, key=lambda r: r.error) if within else None
-        out.append({
-            "peer": f"{p.family} {p.resolution}", "peer_error": p.error, "peer_cpu_s": p.cpu_s,
-            "ours_at_error": None if cheap is None else f"{cheap.family} {cheap.resolution} dt={cheap.dt:.3g}"
-            + ("" if cheap.rtol is None else f" rtol={cheap.rtol:g}"),
-            "ours_at_error_cpu_s": None if cheap is None else cheap.cpu_s,
-            "cpu_ratio": None if cheap is None else p.cpu_s / cheap.cpu_s,
-            "ours_at_cpu": None if best is None else f"{best.family} {best.resolution} dt={best.dt:.3g}"
-            + ("" if best.rtol is None else f" rtol={best.rtol:g}"),
-            "ours_at_cpu_error": None if best is None else best.error,
-            "accuracy_ratio": None if best is None else p.error / best.error,
-        })
+        for form in formulations:
+            group = [r for r in mine if r.formulation == form]
+            as_good = [r for r in group if r.error <= p.error]
+            cheap = min(as_good, key=lambda r: r.cpu_s) if as_good else None
+            within = [r for r in group if r.cpu_s <= p.cpu_s]
+            best = min(within, key=lambda r: r.error) if within else None
+            out.append({
+                "peer": f"{p.family} {p.resolution}", "peer_error": p.error, "peer_cpu_s": p.cpu_s,
+                "formulation": form,
+                "ours_at_error": None if cheap is None else _label(cheap),
+                "ours_at_error_cpu_s": None if cheap is None else cheap.cpu_s,
+                "cpu_ratio": None if cheap is None else p.cpu_s / cheap.cpu_s,
+                "ours_at_cpu": None if best is None else _label(best),
+                "ours_at_cpu_error": None if best is None else best.error,
+                "accuracy_ratio": None if best is None else p.error / best.error,
+            })
     return out
 
 
@@ -300,9 +354,10 @@ class Result:
     ours: list[Run]
     peers: list[Run]
     ratios: list[dict]
-    lam_max: dict[str, tuple[float, float]]
+    lam_max: dict[str, tuple[float, float, float]]
     peer_version: str | None = None
     peer_note: str | None = None
+    damping: dict[str, dict] = field(default_factory=dict)
 
 
 def _say(log: Callable | None, msg: str) -> None:
@@ -312,7 +367,7 @@ def _say(log: Callable | None, msg: str) -> None:
 
 def _describe(r: Run) -> str:
     extra = f" rtol={r.rtol:g}" if r.rtol is not None else ""
-    head = f"{r.family:>22s} {r.resolution:>8s} dt={r.dt:.3g}{extra}"
+    head = f"{r.family:>22s} {r.formulation or '':>6s} {r.resolution:>8s} dt={r.dt:.3g}{extra}"
     if r.status != "ok":
         return f"{head}: {r.status}"
     err = f" err={r.error:.3e}" if np.isfinite(r.error) else ""
@@ -354,15 +409,18 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     if fresh and cache is not None and cache.exists():
         for f in cache.glob("*.npz"):
             f.unlink()
-    built: dict[tuple[int, int], Discretized] = {}
+    built: dict[tuple[int, int, str], Discretized] = {}
 
-    def disc(p: int, n: int) -> Discretized:
-        if (p, n) not in built:
-            built[(p, n)] = prepare(plan.scene, p, n, plan.t_end, plan.every, backend)
-            d = built[(p, n)]
-            _say(log, f"  p={p} n_ctrl={n}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = {d.max_real:.3g} 1/s, "
-                      f"{1e6 * d.stage_cost_s:.1f} us CPU per stage")
-        return built[(p, n)]
+    def disc(p: int, n: int, form: str = "primal") -> Discretized:
+        if (p, n, form) not in built:
+            built[(p, n, form)] = d = prepare(plan.scene, p, n, plan.t_end, plan.every, backend, form)
+            if d.refused:
+                _say(log, f"  p={p} n_ctrl={n} {form}: {d.refused}")
+            else:
+                kv = f", Kelvin-Voigt tau = {d.tau:.3g} s (zeta1 = {d.damping.zeta1:.2g})" if d.damping else ""
+                _say(log, f"  p={p} n_ctrl={n} {form}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = "
+                          f"{d.max_real:.3g} 1/s{kv}, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
+        return built[(p, n, form)]
 
     def cached(key_parts, make: Callable[[], Run]) -> Run:
         key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts)
@@ -374,14 +432,15 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
             _store(cache, key, run)
         return run
 
-    # 1. reference (and a check of its time error at twice the step)
+    # 1. reference (and a check of its time error at twice the step); primal collocation
     p_ref, n_ref = plan.reference
     res_ref = f"p{p_ref} n{n_ref}"
-    _say(log, f"reference: RKMK6, {res_ref}")
+    _say(log, f"reference: RKMK6, primal {res_ref}")
     d_ref = disc(p_ref, n_ref)
     y_ref = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_ref.lam_max, plan.t_end).y)
     dt_ref = fit_step(y_ref / d_ref.lam_max, plan.every)
     ref = cached(("ref", p_ref, n_ref, dt_ref), partial(run_fixed, d_ref, "rkmk6", dt_ref, plan.t_end, plan.every, res_ref))
+    ref.formulation = "primal"
     if ref.status != "ok":
         raise RuntimeError(f"bench {plan.scene}: the reference run failed: {ref.status}")
     _say(log, _describe(ref))
@@ -391,53 +450,76 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     dt_chk = fit_step(2 * dt_ref, plan.every)
     check = cached(("ref-check", "rkmk65", p_ref, n_ref, dt_chk),
                    partial(run_fixed, d_ref, "rkmk65", dt_chk, plan.t_end, plan.every, res_ref))
+    check.formulation = "primal"
     check.error = tip_error(check, ref)
     _say(log, "  time-error bound of the reference (RKMK65 at 2 dt): " + _describe(check))
 
-    # 2. ours: every method at its stable step on every discretization, and the time study
+    # 2. ours: every method at its stable step on every discretization and formulation, and
+    #    the time study (primal)
     p_t, n_t = plan.time_study
     res_t = f"p{p_t} n{n_t}"
     d_t = disc(p_t, n_t)
     y_t = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_t.lam_max, plan.t_end).y)
     dt_t = fit_step(y_t / d_t.lam_max, plan.every)
     tref = cached(("ref", p_t, n_t, dt_t), partial(run_fixed, d_t, "rkmk6", dt_t, plan.t_end, plan.every, res_t))
+    tref.formulation = "primal"
     if tref.status != "ok":
         raise RuntimeError(f"bench {plan.scene}: the time-study reference ({res_t}) failed: {tref.status}")
     tref.error = tip_error(tref, ref)
     _say(log, "time-study reference: " + _describe(tref))
     ours: dict[str, Run] = {}
 
-    def add(key_parts, make: Callable[[], Run], timed: bool) -> None:
+    def add(key_parts, d: Discretized, make: Callable[[], Run], timed: bool) -> None:
         k = _key(*key_parts)
         if k in ours:
             return
         r = cached(key_parts, make)
+        r.formulation, r.kelvin_voigt = d.formulation, d.tau  # runs cached before formulations had none
         r.error = tip_error(r, ref)
         if timed:
             r.time_error = tip_error(r, tref)
         ours[k] = r
         _say(log, _describe(r))
 
-    ladder = [((p, n), (1.0,)) for p, n in plan.discretizations if (p, n) != (p_t, n_t)]
-    ladder.append(((p_t, n_t), tuple(plan.dt_fractions)))
-    for (p, n), fractions in ladder:
-        d, res, timed = disc(p, n), f"p{p} n{n}", (p, n) == (p_t, n_t)
+    def fixed(p: int, n: int, form: str, fractions, timed: bool) -> None:
+        d, res = disc(p, n, form), f"p{p} n{n}"
         for m in plan.methods:
+            if d.refused:
+                ours[_key(m, form, p, n, "refused")] = r = Run(m.upper(), res, math.nan, form,
+                                                               status=f"failed: {d.refused}")
+                _say(log, _describe(r))
+                continue
             dt_stable = stable_step(resolve_method(m), d.lam_max, plan.t_end).dt
             for f in fractions:
                 dt = fit_step(f * dt_stable, plan.every)
-                add((m, p, n, dt), partial(run_fixed, d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
-    for m in plan.adaptive:
-        h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
-        for rtol in plan.rtols:
-            add((m, "adaptive", p_t, n_t, rtol, h_max),
-                partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
+                # primal keys are those of the runs cached before formulations were an axis
+                key = (m, p, n, dt) if form == "primal" else (m, form, p, n, dt, d.tau)
+                add(key, d, partial(run_fixed, d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
+
+    def time_study() -> None:
+        fixed(p_t, n_t, "primal", tuple(plan.dt_fractions), True)
+        for m in plan.adaptive:
+            h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
+            for rtol in plan.rtols:
+                add((m, "adaptive", p_t, n_t, rtol, h_max), d_t,
+                    partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
+
+    for form in plan.formulations:
+        for p, n in plan.discretizations:
+            if not (form == "primal" and (p, n) == (p_t, n_t)):
+                fixed(p, n, form, (1.0,), False)
+        if form == "primal":
+            time_study()
+    if "primal" not in plan.formulations:
+        time_study()
 
     # 3. peer
     peers, version, note = _peer_runs(plan, cached, ref, log) if peer and plan.peer_elements else ([], None, None)
-    lam = {f"p{p} n{n}": (d.lam_max, d.max_real) for (p, n), d in built.items()}
+    lam = {f"p{p} n{n} {form}": (d.lam_max, d.max_real, d.tau) for (p, n, form), d in built.items()}
+    damping = {f"p{p} n{n} {form}": (d.damping.as_dict() if d.damping else {"refused": d.refused})
+               for (p, n, form), d in built.items() if form == "mixed"}
     mine = list(ours.values())
-    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note)
+    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note, damping)
 
 
 # ----------------------------------------------------------------------------- reporting
@@ -450,64 +532,98 @@ def markdown(result: Result) -> str:
     pl = result.plan
     lines = [f"### {pl.scene}: T = {pl.t_end:g} s, tip history every {pl.every:g} s", ""]
     ref = result.reference
-    lines.append(f"Reference: RKMK6, {ref.resolution}, dt = {ref.dt:.3g} s ({ref.steps} steps, "
+    lines.append(f"Reference: RKMK6, primal {ref.resolution}, dt = {ref.dt:.3g} s ({ref.steps} steps, "
                  f"{ref.cpu_s:.1f} s CPU); max |tip_ref| = {np.max(np.linalg.norm(ref.tip, axis=1)):.4g} m.")
     chk = result.reference_check
     if chk is not None:
         lines.append(f"Bound on its time error (RKMK65 at dt = {chk.dt:.3g} s against it): "
                      + (f"{_fmt(chk.error, '.2e')} m." if chk.status == "ok" else f"not measured ({chk.status})."))
     tr = result.time_reference
-    lines.append(f"Time study on {tr.resolution}: time errors against RKMK6 on that discretization at dt = {tr.dt:.3g} s "
+    lines.append(f"Time study on primal {tr.resolution}: time errors against RKMK6 on that discretization at dt = {tr.dt:.3g} s "
                  f"(which is {_fmt(tr.error, '.2e')} m from the reference: the space error of {tr.resolution}).")
     lines.append("Linearized spectrum at the initial state, |lambda|max (max Re lambda) [1/s]: "
                  + ", ".join(f"{k}: {v[0]:.3g} ({v[1]:.2g})" for k, v in result.lam_max.items()) + ".")
-    lines += ["", "| run | resolution | dt [s] | rtol | steps | rejected | CPU [s] | max tip error [m] | "
-              "time error [m] | status |", "|---|---|---|---|---|---|---|---|---|---|"]
+    if result.damping:
+        lines.append("Mixed runs: Kelvin-Voigt retardation time sized at rest (least that leaves no growing mode), "
+                     "tau [s] (damping ratio on the first mode; undamped max Re lambda [1/s]): "
+                     + ", ".join(f"{k.removesuffix(' mixed')}: " + (
+                         f"refused ({v['refused']})" if "refused" in v else
+                         f"{v['tau']:.2g} ({v['zeta1']:.1g}; {v['max_real_undamped']:.2g})")
+                         for k, v in result.damping.items()) + ". Primal runs are undamped.")
+    lines += ["", "| run | formulation | resolution | dt [s] | rtol | steps | rejected | CPU [s] | max tip error [m] | "
+              "time error [m] | status |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in result.ours + result.peers:
-        lines.append(f"| {r.family} | {r.resolution} | {_fmt(r.dt, '.3g')} | {_fmt(r.rtol, 'g')} | {r.steps} | "
+        lines.append(f"| {r.family} | {r.formulation or '-'} | {r.resolution} | {_fmt(r.dt, '.3g')} | "
+                     f"{_fmt(r.rtol, 'g')} | {r.steps} | "
                      f"{r.rejected if r.rtol is not None else '-'} | {_fmt(r.cpu_s, '.3g')} | {_fmt(r.error, '.3e')} | "
                      f"{_fmt(r.time_error, '.3e')} | {r.status} |")
     if result.peer_note:
         lines += ["", f"Peer: {result.peer_note}."]
     if result.ratios:
-        lines += ["", f"Ratios against PyElastica {result.peer_version} (CPU ratio: peer CPU / CPU of our cheapest run "
-                  "at least as accurate; accuracy ratio: peer error / error of our best run within the peer's CPU):",
-                  "", "| peer run | peer error [m] | peer CPU [s] | ours at that error | CPU [s] | CPU ratio | "
+        lines += ["", f"Ratios against PyElastica {result.peer_version}, per formulation of ours (CPU ratio: peer CPU / "
+                  "CPU of our cheapest run of that formulation at least as accurate; accuracy ratio: peer error / "
+                  "error of our best run of that formulation within the peer's CPU):",
+                  "", "| peer run | peer error [m] | peer CPU [s] | ours | ours at that error | CPU [s] | CPU ratio | "
                   "ours within that CPU | error [m] | accuracy ratio |",
-                  "|---|---|---|---|---|---|---|---|---|"]
+                  "|---|---|---|---|---|---|---|---|---|---|"]
         for q in result.ratios:
-            lines.append(f"| {q['peer']} | {q['peer_error']:.3e} | {q['peer_cpu_s']:.3g} | {q['ours_at_error'] or '-'} | "
+            lines.append(f"| {q['peer']} | {q['peer_error']:.3e} | {q['peer_cpu_s']:.3g} | {q['formulation'] or '-'} | "
+                         f"{q['ours_at_error'] or '-'} | "
                          f"{_fmt(q['ours_at_error_cpu_s'], '.3g')} | {_fmt(q['cpu_ratio'], '.1f')} | "
                          f"{q['ours_at_cpu'] or '-'} | {_fmt(q['ours_at_cpu_error'], '.3e')} | "
                          f"{_fmt(q['accuracy_ratio'], '.1f')} |")
     return "\n".join(lines) + "\n"
 
 
+def _envelope(runs: list[Run]) -> tuple[list[float], list[float]]:
+    """Lower envelope: the smallest error reached within each CPU time (a step line)."""
+    xs, ys = [], []
+    for r in sorted(runs, key=lambda r: r.cpu_s):
+        if not ys or r.error < ys[-1]:
+            if ys:
+                xs.append(r.cpu_s)
+                ys.append(ys[-1])
+            xs.append(r.cpu_s)
+            ys.append(r.error)
+    return xs, ys
+
+
 def plot(result: Result, path: Path) -> Path:
     """Two log-log panels. Left: error against the fine reference over CPU time, one colour
-    per method, one marker per resolution, PyElastica in black. Right: the time study,
-    time error against CPU time per method (the paper's Fig. 4(b), 5(b))."""
+    per method, one marker per resolution, filled for primal and open for mixed
+    collocation, the lower envelope of each formulation in grey, PyElastica in black.
+    Right: the time study, time error against CPU time per method (the paper's Fig. 4(b),
+    5(b))."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6.4))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6.8))
     ok = [r for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
     families = sorted({r.family for r in result.ours})
     colors = {f: plt.cm.tab10(i % 10) for i, f in enumerate(families)}
-    markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*h"))
-    groups: dict[tuple[str, str], list[Run]] = {}
+    markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*hPX"))
+    forms = list(dict.fromkeys(r.formulation for r in result.ours))
+    styles = {"primal": ("-", None), "mixed": ("--", "white")}  # line style, marker face (None: filled)
+    groups: dict[tuple[str, str, str], list[Run]] = {}
     for r in ok:
-        groups.setdefault((r.family, r.resolution), []).append(r)
-    labelled = set()
-    for (fam, res), runs in sorted(groups.items()):
+        groups.setdefault((r.family, r.formulation, r.resolution), []).append(r)
+    for (fam, form, res), runs in sorted(groups.items(), key=lambda kv: tuple(map(str, kv[0]))):
         runs = sorted(runs, key=lambda r: r.cpu_s)
+        ls, face = styles.get(form, ("-", None))
         ax.loglog([r.cpu_s for r in runs], [r.error for r in runs], marker=markers[res], color=colors[fam], lw=1,
-                  ls="-" if len(runs) > 1 else "none", label=fam if fam not in labelled else None)
-        labelled.add(fam)
+                  ls=ls if len(runs) > 1 else "none", mfc=face)
+    for fam in families:
+        ax.plot([], [], color=colors[fam], marker="s", ls="none", label=fam)
     for res, mk in markers.items():
         ax.plot([], [], marker=mk, color="0.5", ls="none", label=res)
+    for form in forms:
+        xs, ys = _envelope([r for r in ok if r.formulation == form])
+        if xs:
+            ls, face = styles.get(form, ("-", None))
+            name = form + (" (open markers, Kelvin-Voigt damped)" if form == "mixed" else " (filled markers)")
+            ax.loglog(xs, ys, color="0.4", ls=ls, lw=2.2, alpha=0.45, label=f"{name}: best within CPU")
     for fam, style in (("PyElastica", "k-"), ("PyElastica, our continuum model", "k--")):
         pr = sorted((r for r in result.peers if r.family == fam and r.status == "ok" and np.isfinite(r.error)),
                     key=lambda r: r.cpu_s)
@@ -517,7 +633,7 @@ def plot(result: Result, path: Path) -> Path:
     ax.set_xlabel("CPU time [s]")
     ax.set_ylabel("max tip error against the fine RKMK6 reference [m]")
     ax.set_title(f"{result.plan.scene}, T = {result.plan.t_end:g} s: space + time error "
-                 f"(reference {result.reference.resolution})", fontsize=9)
+                 f"(reference: RKMK6, primal {result.reference.resolution})", fontsize=9)
     ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     tr = result.time_reference
     for fam in families:
@@ -526,8 +642,8 @@ def plot(result: Result, path: Path) -> Path:
         if runs:
             bx.loglog([r.cpu_s for r in runs], [r.time_error for r in runs], marker="o", color=colors[fam], label=fam)
     bx.set_xlabel("CPU time [s]")
-    bx.set_ylabel(f"max tip error against RKMK6 on {tr.resolution} [m]")
-    bx.set_title(f"time error on {tr.resolution} (paper Fig. 4(b)/5(b))", fontsize=9)
+    bx.set_ylabel(f"max tip error against RKMK6 on primal {tr.resolution} [m]")
+    bx.set_title(f"time error on primal {tr.resolution} (paper Fig. 4(b)/5(b))", fontsize=9)
     bx.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     for a in (ax, bx):
         a.grid(True, which="both", alpha=0.3)
@@ -549,7 +665,7 @@ def write(result: Result, out: Path) -> list[Path]:
     payload = {"plan": asdict(result.plan), "reference": result.reference.row(),
                "reference_check": None if result.reference_check is None else result.reference_check.row(),
                "time_reference": result.time_reference.row(),
-               "lambda_max": result.lam_max, "ours": [r.row() for r in result.ours],
+               "lambda_max": result.lam_max, "damping": result.damping, "ours": [r.row() for r in result.ours],
                "peers": [r.row() for r in result.peers], "ratios": result.ratios,
                "peer_version": result.peer_version, "peer_note": result.peer_note}
     tmp = js.with_suffix(".json.tmp")

@@ -18,9 +18,10 @@ from liegroup_int.bench import (
 )
 from liegroup_int.cli import main
 
-# Pendulum over 20 ms: the smallest plan that still has a space ladder (n_ctrl 11, 21),
-# a time study on p=4, n_ctrl=15 (RKMK4 at 1, 1/2, 1/4 of its stable step) and an
-# adaptive pair; RKMK6 reference on p=6, n_ctrl=21.
+# Pendulum over 20 ms: the smallest plan that still has a space ladder (n_ctrl 11, 21) in
+# both formulations (mixed p4 n21 needs damping: a pair grows at 3.7 1/s undamped), a time
+# study on primal p=4, n_ctrl=15 (RKMK4 at 1, 1/2, 1/4 of its stable step) and an adaptive
+# pair; RKMK6 reference on primal p=6, n_ctrl=21.
 TINY = Plan(scene="pendulum", t_end=0.02, every=2e-3, reference=(6, 21), reference_y=0.4,
             discretizations=((4, 11), (4, 21)), time_study=(4, 15), methods=("rkmk4",),
             dt_fractions=(1.0, 0.5, 0.25), adaptive=("rkmk45",), rtols=(1e-8,), peer_elements=(),
@@ -35,7 +36,7 @@ def tiny(tmp_path_factory):
 
 def test_tiny_plan_measures_space_and_time_error(tiny):
     out, res = tiny
-    by = {(r.family, r.resolution, r.dt): r for r in res.ours}
+    by = {(r.family, r.formulation, r.resolution, r.dt): r for r in res.ours}
     assert all(r.status == "ok" for r in res.ours), [r.status for r in res.ours]
     # the reference's own time error (RKMK6 at 2 dt) must be far below every run's error
     floor = res.reference_check.error
@@ -43,9 +44,10 @@ def test_tiny_plan_measures_space_and_time_error(tiny):
     # space error at the stable step: n_ctrl = 21 against 11 measured 5.2x better (9.3e-6
     # against 4.8e-5 m); the asymptotic rate ~3.6 of p=4 would give ~24x, but 20 ms after the
     # load is switched on the error is still transient; 3x leaves a margin
-    e = {r.resolution: r.error for r in res.ours if r.family == "RKMK4"}
+    e = {r.resolution: r.error for r in res.ours if r.family == "RKMK4" and r.formulation == "primal"}
     assert e["p4 n11"] > 3 * e["p4 n21"]
     fixed15 = sorted((r for r in res.ours if r.family == "RKMK4" and r.resolution == "p4 n15"), key=lambda r: -r.dt)
+    assert len(fixed15) == 3 and all(r.formulation == "primal" for r in fixed15)
     # time error at p4 n15 falls with dt: RKMK4 is 4th order (16x per halving); at the stable
     # step the top modes excited by the load dominate, so over a 4x smaller step we ask 4x only
     assert fixed15[-1].time_error < 0.25 * fixed15[0].time_error
@@ -55,6 +57,32 @@ def test_tiny_plan_measures_space_and_time_error(tiny):
     assert len(by) == len(res.ours)
     ad = [r for r in res.ours if "adaptive" in r.family]
     assert len(ad) == 1 and ad[0].steps > 0 and ad[0].rtol == 1e-8 and np.isfinite(ad[0].time_error)
+    assert ad[0].formulation == "primal"
+
+
+def test_tiny_plan_runs_the_mixed_formulation(tiny):
+    _, res = tiny
+    mixed = {r.resolution: r for r in res.ours if r.formulation == "mixed"}
+    # one run per discretization x method at its stable step; the time study stays primal
+    assert sorted(mixed) == ["p4 n11", "p4 n21"]
+    assert sum(r.formulation == "mixed" for r in res.ours) == 2
+    for r in mixed.values():
+        assert r.status == "ok" and r.family == "RKMK4" and r.steps > 0
+        assert np.all(np.isfinite(r.tip)) and np.isfinite(r.error) and r.error > 0
+        assert math.isnan(r.time_error)
+    # the damping is sized per discretization: none needed at n_ctrl = 11, some at 21
+    # (measured tau = 8.8e-7 s), light on the first mode, and reported
+    assert mixed["p4 n11"].kelvin_voigt == 0.0
+    assert 0.0 < mixed["p4 n21"].kelvin_voigt < 1e-4
+    assert res.damping["p4 n21 mixed"]["tau"] == mixed["p4 n21"].kelvin_voigt
+    assert res.damping["p4 n21 mixed"]["zeta1"] < 1e-3
+    assert res.lam_max["p4 n21 mixed"][2] == mixed["p4 n21"].kelvin_voigt
+    assert all(r.kelvin_voigt == 0.0 for r in res.ours if r.formulation == "primal")
+    # locking-free: at n_ctrl = 11 the mixed tip is measured 4.7x closer to the reference
+    # (1.0e-5 against 4.8e-5 m); the primal and mixed runs are distinct runs, not one cached twice
+    primal = {r.resolution: r for r in res.ours if r.formulation == "primal" and r.family == "RKMK4"}
+    assert mixed["p4 n11"].error < 0.5 * primal["p4 n11"].error
+    assert not np.array_equal(mixed["p4 n21"].tip, primal["p4 n21"].tip)
 
 
 def test_outputs_and_cache(tiny):
@@ -63,12 +91,16 @@ def test_outputs_and_cache(tiny):
     assert [p.name for p in made] == ["work_precision.md", "work_precision.json", "work_precision.png"]
     data = json.loads((out / "work_precision.json").read_text())
     assert len(data["ours"]) == len(res.ours) and data["peers"] == []
+    assert {r["formulation"] for r in data["ours"]} == {"primal", "mixed"}
+    assert data["damping"]["p4 n21 mixed"]["tau"] > 0
     md = (out / "work_precision.md").read_text()
     assert "time error" in md and "p4 n15" in md
+    assert "| RKMK4 | mixed | p4 n21 |" in md and "| RKMK4 | primal | p4 n21 |" in md
     again = work_precision(TINY, out, peer=False, log=None)
     assert all(r.cached for r in again.ours)
     assert [r.error for r in again.ours] == [r.error for r in res.ours]
     assert [r.cpu_s for r in again.ours] == [r.cpu_s for r in res.ours]
+    assert [(r.formulation, r.kelvin_voigt) for r in again.ours] == [(r.formulation, r.kelvin_voigt) for r in res.ours]
 
 
 def _run(family, res, dt, cpu, err, status="ok"):
@@ -86,6 +118,18 @@ def test_ratio_rules():
     coarse = q["PyElastica 50 el"]
     assert coarse["cpu_ratio"] == pytest.approx(0.2 / 0.5)  # 'c' is the cheapest at <= 1e-1
     assert coarse["accuracy_ratio"] is None  # nothing of ours finished within 0.2 s
+
+
+def test_ratios_per_formulation():
+    ours = [Run("RKMK4", "a", 1e-5, "primal", cpu_s=1.0, error=1e-3),
+            Run("RKMK4", "a", 1e-5, "mixed", 1e-6, cpu_s=1.2, error=1e-5),
+            Run("RKMK4", "b", 1e-5, "mixed", 1e-6, cpu_s=20.0, error=1e-7)]
+    peers = [_run("PyElastica", "400 el", 1e-6, 10.0, 2e-3)]
+    q = {r["formulation"]: r for r in ratios(ours, peers)}
+    assert sorted(q) == ["mixed", "primal"]
+    assert q["primal"]["cpu_ratio"] == pytest.approx(10.0) and q["primal"]["accuracy_ratio"] == pytest.approx(2.0)
+    assert q["mixed"]["cpu_ratio"] == pytest.approx(10.0 / 1.2)  # 'b' is more accurate but over the peer's CPU
+    assert q["mixed"]["accuracy_ratio"] == pytest.approx(2e-3 / 1e-5)
 
 
 def test_tip_error_needs_the_same_grid():
@@ -121,5 +165,10 @@ def test_bench_bad_input_is_one_line(argv, words, capsys):
 def test_plans_check_themselves():
     with pytest.raises(ValueError, match="must divide"):
         Plan(scene="x", t_end=1.0, every=0.3, reference=(4, 31), reference_y=0.4, discretizations=((4, 21),))
+    with pytest.raises(ValueError, match="formulations"):
+        Plan(scene="x", t_end=1.0, every=0.5, reference=(4, 31), reference_y=0.4, discretizations=((4, 21),),
+             formulations=("primal", "hybrid"))
+    assert all(plan_for(s, quick=q).formulations == ("primal", "mixed") for s in ("pendulum", "cantilever")
+               for q in (False, True))
     assert plan_for("cantilever").t_end == 0.05 and plan_for("pendulum").t_end == 1.0
     assert plan_for("pendulum", t_end=0.2).every == 5e-3
