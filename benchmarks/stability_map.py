@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from liegroup_int.bench.stability import MapEntry, map_entry
+from liegroup_int.bench.stability import map_entry
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / "bench" / "stability_map.json"
