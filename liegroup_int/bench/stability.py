@@ -24,7 +24,7 @@ import numpy as np
 from ..groups.so3 import exp_so3
 from ..integrators import eigenvalues, integrate_fixed, resolve_method, spectral_radius, stable_step
 from ..problems.beam import BeamState
-from ..problems.beam.damping import GROWTH_THRESHOLD, size_kelvin_voigt
+from ..problems.beam.damping import GROWTH_THRESHOLD, first_frequency, size_kelvin_voigt
 from ..scenes import load_scene
 from ..scenes.beam import problem
 
@@ -136,9 +136,7 @@ def map_entry(scene: str, state: str, formulation: str, damping: str, p: int, n:
         return e
     i = int(np.argmax(lam.real))
     e.max_real, e.at_imag, e.lam_max = float(lam.real[i]), float(abs(lam.imag[i])), float(np.max(np.abs(lam)))
-    im = np.abs(lam.imag)
-    im = im[im > 1e-6 * max(1.0, e.lam_max)]
-    e.omega1 = float(np.min(im)) if im.size else 0.0
+    e.omega1 = first_frequency(lam)
     if damping == "auto" and e.tau > 0:
         e.zeta1 = 0.5 * e.tau * e.omega1 if state != "rest" else e.zeta1
     e.seconds = time.perf_counter() - start

@@ -83,7 +83,8 @@ def _top(lam: np.ndarray) -> tuple[float, float]:
     return float(lam.real[k]), float(abs(lam.imag[k]))
 
 
-def _first_frequency(lam: np.ndarray) -> float:
+def first_frequency(lam: np.ndarray) -> float:
+    """Smallest non-zero ``|Im lambda|`` [1/s] of a spectrum (its first mode), 0 if none."""
     im = np.abs(lam.imag)
     im = im[im > 1e-6 * max(1.0, float(np.max(np.abs(lam))))]
     return float(np.min(im)) if im.size else 0.0
@@ -121,7 +122,7 @@ def size_kelvin_voigt(with_tau, y, t: float = 0.0, threshold: float = GROWTH_THR
     osc = np.abs(lam0.imag) > lam0.real
     k0 = int(np.argmax(np.where(osc, lam0.real, -np.inf)))
     re0, im0 = float(lam0.real[k0]), float(abs(lam0.imag[k0]))
-    omega1 = _first_frequency(lam0)
+    omega1 = first_frequency(lam0)
     if re0 <= threshold:
         return DampingReport(0.0, re0, im0, re0, omega1, 0.0, float(np.max(np.abs(lam0))), count, *_top(lam0))
     grow = lam0[osc & (lam0.real > threshold)]

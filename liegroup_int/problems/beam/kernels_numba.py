@@ -382,10 +382,7 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
     n, W = c.shape[0], band.shape[2]
     thr = prm[_P_THR]
     for i in range(n):
-        for d in range(3):
-            c2[i, d] = c[i, d] + u[0, i, d]
-            v2[i, d] = v[i, d] + u[2, i, d]
-            w2[i, d] = w[i, d] + u[3, i, d]
+        _translate_point(u, c, v, w, c2, v2, w2, i)
         # theta and its s-derivatives at the collocation point
         t0 = t1 = t2 = s0 = s1 = s2 = q0 = q1 = q2 = 0.0
         js = j0[i]
@@ -404,29 +401,10 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
             q2 += b2 * x2
         ang = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
         cA, cB, cC, cB1, cC1 = _coef_ABCB1C1(ang, ser, thr)
-        # exp(hat(theta)) = I + A X + B X X
-        xx, yy, zz = t0, t1, t2
-        e00 = 1.0 + cB * (-zz * zz - yy * yy)
-        e11 = 1.0 + cB * (-zz * zz - xx * xx)
-        e22 = 1.0 + cB * (-yy * yy - xx * xx)
-        e01 = cA * -zz + cB * (xx * yy)
-        e10 = cA * zz + cB * (xx * yy)
-        e02 = cA * yy + cB * (xx * zz)
-        e20 = cA * -yy + cB * (xx * zz)
-        e12 = cA * -xx + cB * (yy * zz)
-        e21 = cA * xx + cB * (yy * zz)
+        _rotate_point(R, R2, i, cA, cB, t0, t1, t2)
         r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
         r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
         r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
-        R2[i, 0, 0] = e00 * r00 + e01 * r10 + e02 * r20
-        R2[i, 0, 1] = e00 * r01 + e01 * r11 + e02 * r21
-        R2[i, 0, 2] = e00 * r02 + e01 * r12 + e02 * r22
-        R2[i, 1, 0] = e10 * r00 + e11 * r10 + e12 * r20
-        R2[i, 1, 1] = e10 * r01 + e11 * r11 + e12 * r21
-        R2[i, 1, 2] = e10 * r02 + e11 * r12 + e12 * r22
-        R2[i, 2, 0] = e20 * r00 + e21 * r10 + e22 * r20
-        R2[i, 2, 1] = e20 * r01 + e21 * r11 + e22 * r21
-        R2[i, 2, 2] = e20 * r02 + e21 * r12 + e22 * r22
         # g = J_r(theta) theta_s and g_s = d/ds g (kinematics.jr_and_derivative)
         tt = t0 * s0 + t1 * s1 + t2 * s2
         tg0, tg1, tg2 = _cross(t0, t1, t2, s0, s1, s2)
