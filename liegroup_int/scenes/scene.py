@@ -7,7 +7,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Callable, Mapping
 
-from ..integrators import METHODS, resolve_method
+from ..integrators import resolve_method
+from ..tableaux import NAMES
 from .schema import REQUIRED, Key, SceneError, flatten, non_negative, positive, read_toml, resolve_keys
 
 
@@ -164,7 +165,7 @@ class ProblemKind:
 
 
 def common_keys(kind: ProblemKind) -> dict[str, Key]:
-    method_names = tuple(sorted(METHODS))
+    method_names = tuple(sorted(NAMES))
     keys = [
         Key("name", "str", "", "scene name (defaults to the file name)"),
         Key("description", "str", "", "one line shown by `liegroup-int scenes`"),

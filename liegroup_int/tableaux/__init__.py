@@ -11,7 +11,8 @@ This layer depends only on numpy and the standard library.  Public names:
 * Linear stability: :func:`stability_polynomial`,
   :func:`imaginary_axis_limit`, :func:`real_axis_limit`,
   :func:`imaginary_axis_growth`.
-* Registry: :data:`REGISTRY`, :func:`resolve` and one constant per method.
+* Registry: :data:`REGISTRY` (by tableau name), :data:`NAMES` (every accepted name,
+  RKMK method names included), :func:`resolve` and one constant per method.
 """
 
 from .base import ButcherTableau
@@ -19,6 +20,7 @@ from .methods import (
     BS32,
     DP54,
     EULER,
+    NAMES,
     REGISTRY,
     RK2,
     RK3,
@@ -53,6 +55,7 @@ from .stability import (
 __all__ = [
     "ButcherTableau",
     "REGISTRY",
+    "NAMES",
     "resolve",
     "UnknownTableauError",
     "EULER",

@@ -72,6 +72,9 @@ class ButcherTableau:
         First-same-as-last property (last stage equals the next first stage).
     description : str
         One line, including the literature source.
+    method : str, optional
+        The RKMK method name that scenes, the CLI and ``integrate`` use for this tableau
+        (``"rkmk4"``); the tableau's own ``name`` is accepted too (``resolve``).
 
     Attributes
     ----------
@@ -92,6 +95,7 @@ class ButcherTableau:
     order_hat: int | None = None
     fsal: bool = False
     description: str = ""
+    method: str = ""
     A_f: np.ndarray = field(init=False, repr=False, compare=False)
     b_f: np.ndarray = field(init=False, repr=False, compare=False)
     c_f: np.ndarray = field(init=False, repr=False, compare=False)

@@ -46,6 +46,7 @@ def _lower(*rows: str) -> tuple[tuple[str, ...], ...]:
 
 EULER = ButcherTableau(
     name="euler",
+    method="rkmk1",
     A=(("0",),), b=("1",), c=("0",), order=1,
     description="Forward Euler (Euler 1768); imaginary-axis limit 0 (unstable on iR).",
 )
@@ -53,6 +54,7 @@ EULER = ButcherTableau(
 
 RK2 = ButcherTableau(
     name="rk2",
+    method="rkmk2",
     A=_lower("1/2"), b=_vec("0 1"), c=_vec("0 1/2"), order=2,
     description="Explicit midpoint rule (Runge 1895; Ferri & Marino Table A.1); "
                 "imaginary-axis limit 0 (|R(iy)| = sqrt(1 + y^4/4)).",
@@ -62,6 +64,7 @@ RK2 = ButcherTableau(
 
 RK3 = ButcherTableau(
     name="rk3",
+    method="rkmk3",
     A=_lower("1/2", "-1 2"), b=_vec("1/6 2/3 1/6"), c=_vec("0 1/2 1"), order=3,
     description="Kutta's third-order method (Kutta 1901; Ferri & Marino Table A.2 "
                 "with the A32 misprint 1/2 -> 2 corrected); imaginary-axis limit 1.7321.",
@@ -71,6 +74,7 @@ The paper's Table A.2 prints ``A32 = 1/2`` (misprint, see module docstring)."""
 
 RK4 = ButcherTableau(
     name="rk4",
+    method="rkmk4",
     A=_lower("1/2", "0 1/2", "0 0 1"), b=_vec("1/6 1/3 1/3 1/6"), c=_vec("0 1/2 1/2 1"),
     order=4,
     description="Classical Runge-Kutta method (Kutta 1901; Ferri & Marino Table A.3); "
@@ -80,6 +84,7 @@ RK4 = ButcherTableau(
 
 RK6 = ButcherTableau(
     name="rk6",
+    method="rkmk6",
     A=_lower("1/3",
              "0 2/3",
              "1/12 1/3 -1/12",
@@ -99,6 +104,7 @@ all small ``y > 0``).  The paper's Table A.4 shifts row 6 and calls the method
 
 BS32 = ButcherTableau(
     name="bs32",
+    method="rkmk32",
     A=_lower("1/2", "0 3/4", "2/9 1/3 4/9"),
     b=_vec("2/9 1/3 4/9 0"), c=_vec("0 1/2 3/4 1"), order=3,
     b_hat=_vec("7/24 1/4 1/3 1/8"), order_hat=2, fsal=True,
@@ -110,6 +116,7 @@ Imaginary-axis limit ``sqrt(3) ~ 1.7321`` (same ``R`` as every 3-stage RK3)."""
 
 DP54 = ButcherTableau(
     name="dp54",
+    method="rkmk45",
     A=_lower("1/5",
              "3/40 9/40",
              "44/45 -56/15 32/9",
@@ -130,6 +137,7 @@ real-axis limit ~3.3066."""
 
 VERNER65 = ButcherTableau(
     name="verner65",
+    method="rkmk65",
     A=_lower(
         "3/50",
         "519479/27000000 2070721/27000000",
@@ -186,6 +194,22 @@ REGISTRY: dict[str, ButcherTableau] = {
 """All named tableaux, keyed by registry name (``REGISTRY[k].name == k``)."""
 
 
+def _names(tableaux) -> dict[str, ButcherTableau]:
+    """Every accepted name (registry name and RKMK method name) -> tableau; names unique."""
+    names: dict[str, ButcherTableau] = {}
+    for tab in tableaux:
+        for key in filter(None, (tab.name, tab.method)):
+            if key in names:
+                raise ValueError(f"tableau name {key!r} is registered twice")
+            names[key] = tab
+    return names
+
+
+NAMES: dict[str, ButcherTableau] = _names(REGISTRY.values())
+"""Every name :func:`resolve` accepts: the registry names and the RKMK method names
+(``"rkmk4"``), the one list scenes, the CLI and ``integrate`` share."""
+
+
 class UnknownTableauError(KeyError, ValueError):
     """Unknown tableau name (both a ``KeyError`` and a ``ValueError``)."""
 
@@ -199,7 +223,8 @@ def resolve(name_or_tableau: str | ButcherTableau) -> ButcherTableau:
     Parameters
     ----------
     name_or_tableau : str or ButcherTableau
-        Registry name (case-insensitive) or a tableau.
+        Registry name or RKMK method name (:data:`NAMES`, case-insensitive), or a
+        tableau.
 
     Returns
     -------
@@ -218,7 +243,7 @@ def resolve(name_or_tableau: str | ButcherTableau) -> ButcherTableau:
         raise TypeError(f"expected a tableau name or ButcherTableau, got "
                         f"{type(name_or_tableau).__name__}")
     key = name_or_tableau.strip().lower()
-    if key not in REGISTRY:
-        raise UnknownTableauError(f"unknown tableau {name_or_tableau!r}; valid names: "
-                                  f"{', '.join(REGISTRY)}")
-    return REGISTRY[key]
+    if key not in NAMES:
+        raise UnknownTableauError(f"unknown method {name_or_tableau!r}; expected one of: "
+                                  f"{', '.join(sorted(NAMES))}")
+    return NAMES[key]

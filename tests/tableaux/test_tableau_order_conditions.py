@@ -163,8 +163,9 @@ def test_resolve():
     assert resolve("rk4") is RK4
     assert resolve(" RK4 ") is RK4
     assert resolve(RK6) is RK6
+    assert resolve("rkmk4") is RK4 and resolve("RKMK6") is RK6  # method names too
     for exc in (KeyError, ValueError):
-        with pytest.raises(exc, match="valid names: euler, rk2"):
+        with pytest.raises(exc, match="expected one of: bs32, dp54, euler, rk2"):
             resolve("rk5")
     with pytest.raises(TypeError):
         resolve(4)
