@@ -206,22 +206,45 @@ class GroupProblem(Problem):
             raise TypeError(f"GroupProblem: space must be a LieGroup, got {space!r}")
         self.space = space
         self.f = f
+        from ..groups.kernels_numba import CompiledGroup
+
+        #: compiled single-point kernels of the built-in groups (None: NumPy only)
+        self._compiled = CompiledGroup.of(space)
+        self._ndim = len(space.point_shape)
+
+    def _single(self, y) -> bool:
+        """One point, no batch axes, and compiled kernels for the space."""
+        return self._compiled is not None and np.ndim(y) == self._ndim
 
     def action(self, u, y):
+        if self._single(y):
+            return self._compiled.retract(u, np.asarray(y, dtype=float))
         return self.space.retract(u, y)
 
     def dexpinv(self, u, w):
+        if self._compiled is not None and np.ndim(u) == 1:
+            return self._compiled.dexpinv(u, w)
+        return self.space.dexpinv(u, w)
+
+    def increment_rate(self, t, y, u):
+        w = np.asarray(self.f(t, y), dtype=float)
+        if self._compiled is not None and u.ndim == 1 and w.shape == u.shape:
+            return self._compiled.dexpinv(u, w)
         return self.space.dexpinv(u, w)
 
     def vector_field(self, t, y):
         return np.asarray(self.f(t, y), dtype=float)
 
     def zero_increment(self, y):
-        k = len(self.space.point_shape)
+        k = self._ndim
         return np.zeros(np.shape(y)[: np.ndim(y) - k] + (self.space.dim,))
 
     def increment_scale(self, y):
+        if self._single(y):
+            return self._compiled.magnitude(np.asarray(y, dtype=float))
         return self.space.magnitude(y)
 
     def rotation_angle(self, u):
+        if self._compiled is not None and np.ndim(u) == 1:
+            return self._compiled.rotation_angle(u)
         return float(np.max(self.space.rotation_angle(u), initial=0.0))
