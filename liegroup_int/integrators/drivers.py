@@ -15,7 +15,7 @@ import numpy as np
 from ..tableaux import ButcherTableau
 from .problem import Problem
 from .result import BlowUpError, Stats, StepSizeError
-from .rkmk import error_estimate, error_norm, rkmk_step, step_quadrature
+from .rkmk import error_estimate, error_norm, rkmk_step_fsal, step_quadrature
 
 #: Default bound on the rotation angle of one step's increment [rad]. The closed-form
 #: dexpinv of SO(3) has its pole at 2 pi; 1 rad keeps every stage far from it.
@@ -37,6 +37,11 @@ def _output_times(t0: float, t_end: float, t_out) -> np.ndarray:
 def _workspace(problem: Problem, tab: ButcherTableau, y0) -> np.ndarray:
     z = problem.zero_increment(y0)
     return np.zeros((tab.stages,) + z.shape)
+
+
+def _fsal(problem: Problem, tab: ButcherTableau) -> bool:
+    """Reuse the last stage of an FSAL pair as the next first stage (generic loops)."""
+    return bool(tab.fsal and getattr(problem, "fsal_reuse", False))
 
 
 def _quadrature_workspace(problem: Problem, tab: ButcherTableau) -> np.ndarray | None:
@@ -125,6 +130,8 @@ def integrate_fixed(
     stepper = hook(tab) if (hook is not None and monitor is None) else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
+    fsal = _fsal(problem, tab)
+    f0 = None  # f(t, y) from the last stage of the previous step (FSAL pairs)
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -141,8 +148,9 @@ def integrate_fixed(
         for i in range(n):
             t_next = stop if i == n - 1 else t_start + (i + 1) * dt
             h = t_next - t
-            y, u = rkmk_step(problem, tab, t, y, h, K, Q)
-            stats.rhs_evals += tab.stages
+            y, u, f_last = rkmk_step_fsal(problem, tab, t, y, h, K, Q, f0, fsal)
+            stats.rhs_evals += tab.stages - (f0 is not None)
+            f0 = f_last
             _check_finite(u, t_next, stats.steps + 1)
             angle = problem.rotation_angle(u)
             if angle > max_increment_angle:
@@ -228,6 +236,8 @@ def integrate_adaptive(
     stepper = hook(tab) if (hook is not None and monitor is None) else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
+    fsal = _fsal(problem, tab)
+    f0 = None  # f(t, y) of the current state, once known (FSAL pairs; kept over rejections)
     k = min(tab.order, tab.order_hat) + 1
     beta1, beta2 = 0.7 / k, 0.4 / k
     t, y = t0, y0
@@ -259,8 +269,10 @@ def integrate_adaptive(
             raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
         land = t + h >= stop - 1e-12 * max(1.0, abs(stop))
         h_try = stop - t if land else h
-        y_new, u = rkmk_step(problem, tab, t, y, h_try, K, Q)
-        stats.rhs_evals += tab.stages
+        y_new, u, f_last = rkmk_step_fsal(problem, tab, t, y, h_try, K, Q, f0, fsal)
+        stats.rhs_evals += tab.stages - (f0 is not None)
+        if fsal and f0 is None:
+            f0 = K[0].copy()  # f(t, y): reused by retries of this step
         err = error_norm(error_estimate(tab, K, h_try),
                          np.maximum(problem.increment_scale(y), problem.increment_scale(y_new)), rtol, atol)
         angle = problem.rotation_angle(u)
@@ -269,6 +281,7 @@ def integrate_adaptive(
         if err <= 1.0 and angle <= max_increment_angle:
             t = stop if land else t + h_try
             y = y_new
+            f0 = f_last
             stats.accept(h_try)
             if Q is not None:
                 stats.quadrature += step_quadrature(tab, Q, h_try)

@@ -175,6 +175,14 @@ class Problem(ABC):
     #: Whether :meth:`quadrature_rate` is defined (the drivers then integrate it).
     has_quadrature: bool = False
 
+    @property
+    def fsal_reuse(self) -> bool:
+        """Whether the generic drivers may reuse the last stage's vector field of an FSAL
+        pair as the next step's first stage: true when :meth:`end_step` is the identity
+        (the step then ends exactly in that stage's state) and ``increment_rate(t, y, 0)``
+        is ``vector_field(t, y)`` (``dexpinv_0`` is the identity)."""
+        return type(self).end_step is Problem.end_step
+
     def quadrature_rate(self, t: float, y) -> float:
         """An optional scalar ``q(t, y)`` whose time integral the drivers accumulate in
         :attr:`Stats.quadrature` with each step's weights, ``h sum_r b_r q(t_r, y_r)``

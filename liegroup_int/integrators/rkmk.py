@@ -38,20 +38,36 @@ def combine(weights: np.ndarray, K: np.ndarray, h: float, total: float | None = 
 
 
 def compute_stages(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray,
-                   Q: np.ndarray | None = None) -> None:
+                   Q: np.ndarray | None = None, f0: np.ndarray | None = None, fsal: bool = False):
     """Fill ``K[r] = dexpinv_{u_r}(f(t + c_r h, Lambda(u_r, y)))`` for every stage ``r``,
     and ``Q[r] = q(t + c_r h, Lambda(u_r, y))`` when a ``Q`` of shape ``(stages,)`` is
-    given (:meth:`Problem.quadrature_rate`)."""
+    given (:meth:`Problem.quadrature_rate`).
+
+    ``f0`` is ``f(t, y)`` when already known (the first stage of an FSAL pair, whose
+    increment is zero, so ``K[0] = dexpinv_0(f) = f``): it is used instead of evaluating.
+    With ``fsal`` the last stage is evaluated as ``dexpinv(u, vector_field(...))`` and
+    ``(f_last, u_last, y_last)`` returned: its vector field (the next step's ``f0``), its
+    increment and its state; otherwise returns ``None``.
+    """
     A, c = tab.A_f, tab.c_f
-    K[0] = problem.increment_rate(t, y, np.zeros_like(K[0]))
+    s = tab.stages
+    K[0] = f0 if f0 is not None else problem.increment_rate(t, y, np.zeros_like(K[0]))
     if Q is not None:
         Q[0] = problem.quadrature_rate(t, y)
-    for r in range(1, tab.stages):
+    f_last = None
+    for r in range(1, s):
         u = combine(A[r, :r], K, h, c[r])
         y_r = problem.action(u, y)
-        K[r] = problem.increment_rate(t + c[r] * h, y_r, u)
+        if fsal and r == s - 1:
+            # a copy: a user's f may return (and later overwrite) one buffer
+            f = np.array(problem.vector_field(t + c[r] * h, y_r), dtype=float)
+            K[r] = problem.dexpinv(u, f)
+            f_last = (f, u, y_r)
+        else:
+            K[r] = problem.increment_rate(t + c[r] * h, y_r, u)
         if Q is not None:
             Q[r] = problem.quadrature_rate(t + c[r] * h, y_r)
+    return f_last
 
 
 def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray,
@@ -63,9 +79,26 @@ def rkmk_step(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: n
     ``Q`` (shape ``(stages,)``) the stage values of the problem's quadrature rate are
     filled in too; the step's quadrature is then ``h * b . Q`` (:func:`step_quadrature`).
     """
-    compute_stages(problem, tab, t, y, h, K, Q)
+    y_new, u, _ = rkmk_step_fsal(problem, tab, t, y, h, K, Q)
+    return y_new, u
+
+
+def rkmk_step_fsal(problem: Problem, tab: ButcherTableau, t: float, y, h: float, K: np.ndarray,
+                   Q: np.ndarray | None = None, f0: np.ndarray | None = None, fsal: bool = False):
+    """:func:`rkmk_step` with first-same-as-last reuse: ``f0`` (``f(t, y)`` if known) and
+    ``fsal`` as in :func:`compute_stages`. Returns ``(y_new, u, f_last)``.
+
+    For an FSAL pair the last row of ``A`` is ``b``: the last stage state is the step's end
+    state, and with ``fsal`` it is taken as such (its increment as ``u``), so that with
+    ``end_step`` the identity (:attr:`Problem.fsal_reuse`) ``f_last`` is exactly
+    ``f(t + h, y_new)``. (Forming ``h b . K`` again gives the same numbers up to the
+    summation order of one more, zero-weighted, term.)"""
+    last = compute_stages(problem, tab, t, y, h, K, Q, f0, fsal)
+    if last is not None:
+        f_last, u, y_last = last
+        return problem.end_step(y_last), u, f_last
     u = combine(tab.b_f, K, h, 1.0)
-    return problem.end_step(problem.action(u, y)), u
+    return problem.end_step(problem.action(u, y)), u, None
 
 
 def step_quadrature(tab: ButcherTableau, Q: np.ndarray, h: float) -> float:
