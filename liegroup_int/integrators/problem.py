@@ -256,3 +256,16 @@ class GroupProblem(Problem):
         if self._compiled is not None and np.ndim(u) == 1:
             return self._compiled.rotation_angle(u)
         return float(np.max(self.space.rotation_angle(u), initial=0.0))
+
+    def compiled_stepper(self, tab):
+        """The compiled fixed-step loop when ``f`` is a ``numba.njit`` function and the
+        space has compiled kernels (:class:`~.compiled_group.CompiledGroupStepper`; single
+        points), else ``None``. Subclasses that change the step (their own ``action``,
+        ``dexpinv``, ``increment_rate`` or ``end_step``) keep the generic loop."""
+        from .compiled_group import CompiledGroupStepper, is_compiled_function
+
+        own = ("action", "dexpinv", "increment_rate", "end_step", "vector_field")
+        if (self._compiled is None or not is_compiled_function(self.f)
+                or any(getattr(type(self), m) is not getattr(GroupProblem, m) for m in own)):
+            return None
+        return CompiledGroupStepper(self, tab)
