@@ -7,7 +7,9 @@ Two measurements on SO(3) x R^3 (the README's free rigid body), process CPU time
 * the driver and group overhead per stage, with an ``f`` that returns a constant (so what
   is left is the RKMK machinery: stage combinations, the action ``exp(u) y``, ``dexpinv``,
   checks); fixed-step RKMK4 and adaptive RKMK45;
-* the README example itself (RKMK4, dt = 1e-3, 20 s) and its ``f`` alone.
+* the README example itself (RKMK4, dt = 1e-3, 20 s) and its ``f`` alone;
+* the same body with ``f`` compiled by ``numba.njit``: the whole step loop runs compiled
+  (``GroupProblem.compiled_stepper``); compile time reported apart.
 
 Single points of the built-in groups go through the compiled kernels of
 ``liegroup_int/groups/kernels_numba.py``; ``--numpy`` switches them off for comparison.
@@ -62,6 +64,30 @@ def main(argv=None):
     per_f = (time.process_time() - t1) / 20000
     print(f"README example (rkmk4, dt = 1e-3, 20 s): {cpu:.2f} s CPU, {sol.stats.steps} steps; its f alone "
           f"{per_f * 1e6:.1f} us per call")
+    if args.numpy:
+        return
+    from numba import njit
+
+    @njit
+    def f_compiled(t, y):
+        out = np.empty(6)
+        for i in range(3):
+            out[i] = y[3 * i] * y[9] + y[3 * i + 1] * y[10] + y[3 * i + 2] * y[11]
+        a0, a1, a2 = inertia[0] * y[9], inertia[1] * y[10], inertia[2] * y[11]
+        out[3] = (a1 * y[11] - a2 * y[10]) / inertia[0]
+        out[4] = (a2 * y[9] - a0 * y[11]) / inertia[1]
+        out[5] = (a0 * y[10] - a1 * y[9]) / inertia[2]
+        return out
+
+    t0 = time.process_time()
+    integrate(f_compiled, y0, (0.0, 1e-3), space=space, method="rkmk4", dt=1e-3)
+    compile_s = time.process_time() - t0
+    t0 = time.process_time()
+    solc = integrate(f_compiled, y0, (0.0, 20.0), space=space, method="rkmk4", dt=1e-3)
+    cpu_c = time.process_time() - t0
+    print(f"same body, numba.njit f: {cpu_c:.3f} s CPU ({cpu_c / solc.stats.rhs_evals * 1e6:.2f} us per stage, "
+          f"{cpu / cpu_c:.0f}x less than the Python f; compilation {compile_s:.1f} s once); final states differ "
+          f"by {np.abs(solc.y_final - sol.y_final).max():.1e}")
 
 
 if __name__ == "__main__":
