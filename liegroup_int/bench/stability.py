@@ -81,7 +81,7 @@ def circle_state(pb, k: float) -> BeamState:
     return BeamState(sp.solve(c_pts), z.copy(), z.copy(), R, K, np.array(sp.K0_s))
 
 
-def _state_at(pb, scene, t_state: float):
+def _state_at(pb, t_state: float):
     """The scene's state at ``t_state`` (RKMK4 at 0.8 of its stable step)."""
     y0 = pb.initial_state()
     lam = spectral_radius(pb, 0.0, y0)
@@ -126,7 +126,7 @@ def map_entry(scene: str, state: str, formulation: str, damping: str, p: int, n:
             y = circle_state(pb, k)
         elif state.startswith("t="):
             t_lin = float(state[2:])
-            y = _state_at(pb, sc, t_lin)
+            y = _state_at(pb, t_lin)
         else:
             raise ValueError(f"unknown state {state!r}")
         lam = eigenvalues(pb, t_lin, y)
@@ -137,8 +137,8 @@ def map_entry(scene: str, state: str, formulation: str, damping: str, p: int, n:
     i = int(np.argmax(lam.real))
     e.max_real, e.at_imag, e.lam_max = float(lam.real[i]), float(abs(lam.imag[i])), float(np.max(np.abs(lam)))
     e.omega1 = first_frequency(lam)
-    if damping == "auto" and e.tau > 0:
-        e.zeta1 = 0.5 * e.tau * e.omega1 if state != "rest" else e.zeta1
+    if damping == "auto" and e.tau > 0 and state != "rest":  # at rest: the sizing's own ratio
+        e.zeta1 = 0.5 * e.tau * e.omega1
     e.seconds = time.perf_counter() - start
     return e
 

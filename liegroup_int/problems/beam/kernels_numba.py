@@ -89,7 +89,7 @@ FORM_PRIMAL, FORM_MIXED = 0, 1
 #: Columns of the stage work array ``x``: 12 right-hand sides, then (mixed only) the
 #: resultant values n, m (6, solved in place into their control values), R^T c_s (3),
 #: N (3), M (3) per point, and 6 scratch columns for the dense fallback solve.
-_X_RHS, _X_NM, _X_RC, _X_N, _X_M, _X_TMP, X_COLS = 0, 12, 18, 21, 24, 27, 33
+_X_NM, _X_RC, _X_N, _X_M, _X_TMP, X_COLS = 12, 18, 21, 24, 27, 33
 # (everything that may change outside this file - series length and coefficients, the
 # threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
