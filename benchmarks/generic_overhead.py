@@ -9,7 +9,7 @@ Two measurements on SO(3) x R^3 (the README's free rigid body), process CPU time
   checks); fixed-step RKMK4 and adaptive RKMK45;
 * the README example itself (RKMK4, dt = 1e-3, 20 s) and its ``f`` alone;
 * the same body with ``f`` compiled by ``numba.njit``: the whole step loop runs compiled
-  (``GroupProblem.compiled_stepper``); compile time reported apart.
+  (the compiled engine, ``GroupProblem.compiled_kernels``); compile time reported apart.
 
 Single points of the built-in groups go through the compiled kernels of
 ``liegroup_int/groups/kernels_numba.py``; ``--numpy`` switches them off for comparison.

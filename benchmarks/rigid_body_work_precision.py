@@ -351,7 +351,7 @@ def md_table(header, rows):
 
 def summary(rows):
     ours, peer = group_rows(rows, "liegroup_int"), group_rows(rows, "scipy", variants=False)
-    # fixed-step runs go through RigidBodyProblem.compiled_stepper (numba), adaptive ones
+    # fixed-step and adaptive runs go through the compiled engine (RigidBodyProblem.compiled_kernels), adaptive ones
     # through the generic NumPy step loop: their CPU ratios are reported separately too
     fixed = {m: rs for m, rs in ours.items() if rs[0]["param"][0] == "h"}
     adaptive = {m: rs for m, rs in ours.items() if rs[0]["param"][0] == "tol"}
@@ -394,12 +394,13 @@ def micro_costs(min_time: float):
     """CPU microseconds per call of the pieces one evaluation is made of."""
     from liegroup_int import resolve_method
     from liegroup_int.integrators.rkmk import rkmk_step
+    from liegroup_int.integrators.engine import compiled_stepper
 
     problem = TOP.problem()
     u = np.array([0.01, -0.02, 0.03, 0.1, 0.0, -0.1])
     tab = resolve_method("rkmk4")
     K = np.zeros((tab.stages, 6))
-    stepper = problem.compiled_stepper(tab)
+    stepper = compiled_stepper(problem, tab)
     s0 = np.concatenate((rotation_to_quaternion(R0), W0))
     f_float, f_np = make_quat_rhs(), make_quat_rhs_numpy()
     pieces = {

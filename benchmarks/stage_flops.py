@@ -6,8 +6,8 @@ underflows to subnormal numbers.
 
 What one step costs on the public path. ``integrate_fixed`` without a per-step monitor
 runs all steps between two output times in one compiled call,
-``BeamProblem.compiled_stepper(tab)`` -> ``FusedBeamStepper.advance`` ->
-``advance_kernel``: per step 4 ``rates_into`` + 4 ``action_kernel`` + the 4 increment
+``integrate_fixed`` -> the compiled engine (``BeamProblem.compiled_kernels``) ->
+the engine's fixed-step loop (called ``advance_kernel`` in the tables): per step 4 ``rates_into`` + 4 ``action_kernel`` + the 4 increment
 combinations (``_combine``), the Newton-Schulz end step (``_newton_schulz``), the
 finiteness check (``_all_finite``) and the rotation-angle check
 (``rotation_angle_kernel``), all compiled, on work arrays allocated once per call. With a
@@ -122,6 +122,8 @@ import numpy as np  # noqa: E402
 
 from liegroup_int.integrators import MAX_INCREMENT_ANGLE as MAX_ANGLE  # noqa: E402
 from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
+from liegroup_int.integrators.combine_numba import combine_into  # noqa: E402
+from liegroup_int.integrators.engine import compiled_stepper  # noqa: E402
 from liegroup_int.problems.beam import BeamProblem  # noqa: E402
 from liegroup_int.problems.beam import kernels_numba as kn  # noqa: E402
 from liegroup_int.scenes import load_scene  # noqa: E402
@@ -538,12 +540,14 @@ def loop_report(lines):
 
 
 def fused_args(pb, y):
-    """``(stepper, args)``: the fused stepper of the timed run and the argument tuple its
-    ``advance`` passes to ``advance_kernel`` (one step from ``y``)."""
-    st = pb.compiled_stepper(TAB)
-    arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
+    """``(stepper, args)``: the compiled engine's stepper of the timed run (with ``sf``,
+    ``si`` of its data as attributes) and the argument tuple its ``advance`` passes to the
+    engine's fixed-step loop (one step from ``y``)."""
+    st = compiled_stepper(pb, TAB)
+    st.sf, st.si = st.cp.data[0], st.cp.data[1]
+    packed = st.cp.pack(y)
     dt = 1e-9
-    args = (*arr, st.sf, st.si, st.A, st.b, st.c, st.lpos, st.lvec, st.lprof, 0.0, dt, dt, 1,
+    args = (st.cp.data, st.cp.increment_size(packed), st.A, st.b, st.c, st.fsal, packed, 0.0, dt, dt, 1,
             float(MAX_ANGLE))
     return st, args
 
@@ -553,23 +557,29 @@ def asm_crosscheck(nb, y, rows):
     ``advance_kernel`` compile unit and its callees). Returns Markdown lines."""
     k = nb._nb
     W = k.bandwidth
-    _, args = fused_args(nb, y)
-    kn.advance_kernel(*args)
-    text = kernel_asm(kn.advance_kernel, args)
+    st, args = fused_args(nb, y)
+    loop = st.engine.advance_fixed
+    loop(*args)
+    text = kernel_asm(loop, args)
     model = {}
     for kern, sec, ops, ex, kind in rows:
         if kind:
             model.setdefault((kern, kind), Ops())
             model[(kern, kind)] = model[(kern, kind)] + ops
     res = {}
+    engine_lines = []  # the engine's step loop and its step function: "advance_kernel" below
     for fname, flines in asm_functions(text).items():
         if fname.startswith("_ZN7cpython") or fname.startswith("cfunc."):
+            continue
+        if "14_advance_fixed" in fname or "5_step" in fname:
+            engine_lines += flines
             continue
         m = re.search(r"kernels_numba(\d+)", fname) or re.search(r"combine_numba(\d+)", fname)
         if m is None:  # not one of the beam kernels or the shared combination
             continue
         name = fname[m.end():m.end() + int(m.group(1))]  # Itanium mangling: <length><name>
         res["_combine" if name == "combine_into" else name] = loop_report(flines)
+    res["advance_kernel"] = loop_report(engine_lines)
 
     def fmt(o):
         s = f"{o.mul} mul, {o.add} add/sub"
@@ -848,17 +858,17 @@ def compiled_loops():
             kn.action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si)
 
     @njit(cache=False)
-    def rates(reps, c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out):
+    def rates(reps, c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
         for _ in range(reps):
-            kn.rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out)
+            kn.rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw)
 
     @njit(cache=False)
     def combine(reps, A, b, cc, Kf, h, uf):
         s = b.shape[0]
         for _ in range(reps):
             for r in range(1, s):
-                kn._combine(A[r], r, cc[r], Kf, h, uf)
-            kn._combine(b, s, 1.0, Kf, h, uf)
+                combine_into(A[r], r, cc[r], Kf, h, uf)
+            combine_into(b, s, 1.0, Kf, h, uf)
 
     @njit(cache=False)
     def newton_schulz(reps, R):
@@ -906,7 +916,7 @@ def time_kernels(pb, y, dt, batch_s, repeats, variant="taylor"):
         return best_of(lambda: fn(reps, *a), batch_s / 3, repeats) / reps
 
     res = {"action_kernel": per_call(L["action"], u, *ys, *outs, sf, si),
-           "rates_into": per_call(L["rates"], *ys, u, sf, si, fixp, fixr, x, out)}
+           "rates_into": per_call(L["rates"], *ys, u, sf, si, fixp, fixr, x, out, np.zeros(1))}
     if variant != "taylor":
         return res
     S = TAB.stages
@@ -917,7 +927,7 @@ def time_kernels(pb, y, dt, batch_s, repeats, variant="taylor"):
     R = ys[3].copy()
     xs, x0 = np.array(u), np.array(u)
     res.update({
-        "rates_into, u = 0": per_call(L["rates"], *ys, zero, sf, si, fixp, fixr, x, out),
+        "rates_into, u = 0": per_call(L["rates"], *ys, zero, sf, si, fixp, fixr, x, out, np.zeros(1)),
         "4 x _combine": per_call(L["combine"], st.A, st.b, st.c, Kf, dt, np.empty(12 * n)),
         "_newton_schulz": per_call(L["newton_schulz"], R),
         "_all_finite": per_call(L["finite"], uf),

@@ -297,7 +297,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         progress(t, y, stats)
 
     # progress at output times only: no per-step monitor, so compiled problems may run
-    # the steps between two outputs in one call (Problem.compiled_stepper)
+    # the steps between two outputs in one call (the compiled engine, Problem.compiled_kernels)
     progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
 
     summary = {

@@ -235,7 +235,7 @@ def run_adaptive(d: Discretized, method: str, rtol: float, h_max: float, t_end: 
     """One adaptive run of ours (``atol = 1e-3 rtol``, steps capped at ``h_max``); stopped
     (status ``"skipped ..."``) once it has used more than ``budget_s`` CPU seconds (checked
     at every output time: no per-step monitor, so the compiled adaptive loop of the beam,
-    ``BeamProblem.compiled_adaptive``, runs between outputs)."""
+    the compiled engine's adaptive loop, runs between outputs)."""
     tab = resolve_method(method)
     pb = d.problem
     rec_t, rec_tip = [], []

@@ -1,28 +1,27 @@
-"""Compiled fixed-step RKMK for a user's ``numba.njit`` vector field on a built-in group.
+"""Engine kernels of problems on the built-in groups (numba).
 
-``integrate(f, y0, ..., space=G)`` with ``f`` a numba-compiled function ``f(t, y) -> xi``
-(``xi`` a float64 array of shape ``(G.dim,)``) and ``G`` built from ``Rn``, ``SO3``, ``SE3``,
-``Product`` and ``Power``: :meth:`GroupProblem.compiled_stepper` returns a
-:class:`CompiledGroupStepper`, and :func:`~liegroup_int.integrators.drivers.integrate_fixed`
-hands it all the steps between two output times. Each step is the generic one
-(:func:`~liegroup_int.integrators.rkmk.rkmk_step`: the same cancellation-safe stage
-combinations, the groups' compiled ``exp``/``dexpinv`` of
-:mod:`liegroup_int.groups.kernels_numba`, the finiteness and rotation-angle checks), with
-``f`` called from compiled code. Single points only (no batch axes).
+``Rn``, ``SO3``, ``SE3``, ``Product`` and ``Power`` have compiled single-point kernels
+(:mod:`liegroup_int.groups.kernels_numba`) working on a factor table. The kernels here
+adapt them to the engine's contract (:mod:`.engine`) with ``data = (ft, ser, thr, ...)``:
+the action ``exp(u) y``, ``dexpinv``, the rotation angle and the error scale of any point
+of the table. A problem on a group then supplies only its vector field:
+
+* a user's ``numba.njit`` function ``f(t, y) -> xi`` (:func:`group_problem_kernels`,
+  what ``integrate(f, y0, ..., space=G)`` runs when ``f`` is compiled), called from
+  compiled code on the point reshaped to ``G.point_shape``;
+* a plugin's own field kernel (the rigid body, on a power of ``SO3 x R3`` for a batch of
+  bodies).
 """
 
 from __future__ import annotations
 
-import math
+import types
 
 import numpy as np
 from numba import njit
 
-from ..groups.kernels_numba import dexpinv_flat, retract_flat, rotation_angle_flat
-from .combine_numba import combine_into
-from .problem import Advance
-
-ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
+from ..groups.kernels_numba import dexpinv_flat, magnitude_flat, retract_flat, rotation_angle_flat
+from .engine import CompiledProblem, EngineKernels
 
 
 def is_compiled_function(f) -> bool:
@@ -34,71 +33,114 @@ def is_compiled_function(f) -> bool:
     return isinstance(f, CPUDispatcher)
 
 
-@njit(cache=False)
-def advance_kernel(f, shape, ft, ser, thr, A, b, cc, y, t_start, t_stop, dt, n_steps, max_angle):
-    """Up to ``n_steps`` fixed RKMK steps of the flat point ``y`` (read, not written); the
-    grid and the checks of ``integrate_fixed``. ``f`` receives the point reshaped to
-    ``shape``. Returns ``(y, steps, status, t, t_fail, h_min, h_max, angle)`` as the
-    compiled steppers of the plugins do (:class:`~liegroup_int.integrators.problem.Advance`).
-    """
-    s, size = b.shape[0], y.shape[0]
-    dim = ft[ft.shape[0] - 1, 2] + ft[ft.shape[0] - 1, 3]
-    K = np.empty((s, dim))
-    u = np.empty(dim)
-    ys = np.empty(size)
-    y0 = y.copy()
-    y1 = np.empty(size)
-    t, h_min, h_max = t_start, np.inf, 0.0
-    for i in range(n_steps):
-        t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
-        h = t_next - t
-        K[0, :] = f(t, y0.reshape(shape))
-        for r in range(1, s):
-            combine_into(A[r], r, cc[r], K, h, u)
-            retract_flat(ft, ser, thr, u, y0, ys)
-            dexpinv_flat(ft, ser, thr, u, f(t + cc[r] * h, ys.reshape(shape)), K[r])
-        combine_into(b, s, 1.0, K, h, u)
-        for k in range(dim):
-            if not math.isfinite(u[k]):
-                return y0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan
-        ang = rotation_angle_flat(ft, u)
-        if ang > max_angle:
-            return y0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang
-        retract_flat(ft, ser, thr, u, y0, y1)
-        y0, y1 = y1, y0
-        t = t_next
-        h_min, h_max = min(h_min, h), max(h_max, h)
-    return y0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0
+@njit(cache=True)
+def group_action(data, u, y, out):
+    """``out = exp(u) y``, point by point."""
+    ft, ser, thr, ps, dim = data[0], data[1], data[2], data[3], data[4]
+    for j in range(y.shape[0] // ps):
+        retract_flat(ft, ser, thr, u[j * dim:(j + 1) * dim], y[j * ps:(j + 1) * ps], out[j * ps:(j + 1) * ps])
 
 
-class CompiledGroupStepper:
-    """Fixed-step loop of a :class:`GroupProblem` whose ``f`` is numba-compiled.
+@njit(cache=True)
+def group_dexpinv(data, u, w, out):
+    """``out = dexpinv_u(w)``, point by point (``w`` may be ``out``)."""
+    ft, ser, thr, dim = data[0], data[1], data[2], data[4]
+    for j in range(u.shape[0] // dim):
+        a, b = j * dim, (j + 1) * dim
+        dexpinv_flat(ft, ser, thr, u[a:b], w[a:b], out[a:b])
 
-    Parameters
-    ----------
-    problem : GroupProblem
-        With compiled group kernels (``problem._compiled``) and a compiled ``f``.
-    tab : ButcherTableau
-    """
 
-    def __init__(self, problem, tab):
-        self.f = problem.f
-        self.cg = problem._compiled
-        self.shape = tuple(int(k) for k in problem.space.point_shape)
-        self.A = np.ascontiguousarray(tab.A_f, dtype=float)
-        self.b = np.ascontiguousarray(tab.b_f, dtype=float)
-        self.c = np.ascontiguousarray(tab.c_f, dtype=float)
+@njit(cache=True)
+def group_angle(data, u):
+    """Largest rotation angle of ``u`` over all points (NaN wins)."""
+    ft, dim = data[0], data[4]
+    best = 0.0
+    for j in range(u.shape[0] // dim):
+        a = rotation_angle_flat(ft, u[j * dim:(j + 1) * dim])
+        if a != a:
+            return a
+        if a > best:
+            best = a
+    return best
 
-    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float) -> Advance:
-        """See :meth:`liegroup_int.integrators.Problem.compiled_stepper`."""
+
+@njit(cache=True)
+def group_scale(data, y, out):
+    """Error scale of each point of ``y`` (``LieGroup.magnitude``)."""
+    ft, ps, dim = data[0], data[3], data[4]
+    for j in range(y.shape[0] // ps):
+        magnitude_flat(ft, y[j * ps:(j + 1) * ps], out[j * dim:(j + 1) * dim])
+
+
+def group_data(space, *extra) -> tuple:
+    """``(ft, ser, thr, point_size, dim, *extra)`` for the group kernels on ``space`` (one
+    point's factor table; states hold any number of points one after the other)."""
+    from ..groups.kernels_numba import CompiledGroup
+
+    cg = CompiledGroup.of(space)
+    if cg is None:
+        raise ValueError(f"{space!r} has no compiled kernels")
+    return (cg.ft, cg.ser, cg.thr, int(np.prod(space.point_shape)), int(space.dim)) + tuple(extra)
+
+
+# ---------------------------------------------------------------- a user's njit f
+USER_F = None  # bound to the user's function in each compiled copy (see _user_kernels)
+
+
+def _user_field(data, t, y, out):
+    """``out = f(t, y)`` with the point reshaped to the group's point shape."""
+    w = USER_F(t, y.reshape(data[5]))
+    if w.ndim != 1 or w.shape[0] != out.shape[0]:
+        raise ValueError("f(t, y) must return a float array of shape (space.dim,)")
+    for k in range(out.shape[0]):
+        out[k] = w[k]
+    return 0.0
+
+
+def _user_rate(data, t, y, u, out):
+    """``out = dexpinv_u f(t, y)``."""
+    w = USER_F(t, y.reshape(data[5]))
+    if w.ndim != 1 or w.shape[0] != out.shape[0]:
+        raise ValueError("f(t, y) must return a float array of shape (space.dim,)")
+    for k in range(out.shape[0]):
+        out[k] = w[k]
+    dexpinv_flat(data[0], data[1], data[2], u, out, out)
+    return 0.0
+
+
+_USER_KERNELS: dict = {}
+
+
+def _user_kernels(f) -> EngineKernels:
+    """Engine kernels calling the compiled ``f`` (built once per function; not cached on
+    disk: numba cannot key a cache on a user's function)."""
+    kern = _USER_KERNELS.get(f)
+    if kern is None:
+        ns = dict(globals(), USER_F=f)
+        made = {}
+        for fn in (_user_field, _user_rate):
+            copy = types.FunctionType(fn.__code__, ns, fn.__name__)
+            made[fn.__name__] = njit(cache=False)(copy)
+        kern = EngineKernels("user", made["_user_rate"], group_action, group_angle, group_scale,
+                             field=made["_user_field"], dexpinv=group_dexpinv, cache=False)
+        _USER_KERNELS[f] = kern
+    return kern
+
+
+def group_problem_kernels(problem) -> CompiledProblem:
+    """The engine's view of a :class:`~liegroup_int.integrators.problem.GroupProblem`
+    whose ``f`` is numba-compiled: single points of ``problem.space`` only."""
+    shape = tuple(int(k) for k in problem.space.point_shape)
+    size, dim = int(np.prod(shape)), int(problem.space.dim)
+
+    def pack(y):
         y = np.asarray(y, dtype=float)
-        if y.shape != self.shape:
-            raise ValueError(f"a numba-compiled f runs on one point of shape {self.shape}, got {y.shape}; "
+        if y.shape != shape:
+            raise ValueError(f"a numba-compiled f runs on one point of shape {shape}, got {y.shape}; "
                              "use a plain Python f for batches")
-        out = advance_kernel(self.f, self.shape, self.cg.ft, self.cg.ser, self.cg.thr, self.A, self.b, self.c,
-                             np.ascontiguousarray(y).reshape(-1), float(t_start), float(t_stop), float(dt),
-                             int(n_steps), float(max_angle))
-        yf, steps, status, t, t_fail, h_min, h_max, ang = out
-        status = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}[status]
-        return Advance(yf.reshape(self.shape), float(t), int(steps), float(h_min), float(h_max), status,
-                       float(t_fail), float(ang))
+        return np.ascontiguousarray(y).reshape(size)
+
+    def unpack(flat):
+        return flat.reshape(shape)
+
+    return CompiledProblem(_user_kernels(problem.f), group_data(problem.space, shape), lambda n: dim, pack, unpack)

@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 from ..tableaux import ButcherTableau
+from .controller import DEFAULT_CONTROLLER, PIController, h_accepted, h_rejected
 from .problem import Problem
 from .result import BlowUpError, Stats, StepSizeError
 from .rkmk import error_estimate, error_norm, rkmk_step_fsal, step_quadrature
@@ -63,15 +64,26 @@ def _check_finite(u: np.ndarray, t: float, step: int) -> None:
         raise _blow_up(t, step)
 
 
-def _advance_compiled(stepper, tab: ButcherTableau, t: float, y, stop: float, dt: float, n: int,
-                      max_increment_angle: float, stats: Stats):
-    """``n`` steps from ``(t, y)`` to ``stop`` in one call of a compiled stepper
-    (:meth:`Problem.compiled_stepper`); counts and errors as in the step loop of
-    :func:`integrate_fixed`. Returns ``(t, y)``."""
+def _compiled(problem: Problem, tab: ButcherTableau, monitor):
+    """The compiled engine's loops for the problem (:meth:`Problem.compiled_kernels`), or
+    ``None``: no kernels (duck-typed problems have none), or a per-step monitor."""
+    hook = getattr(problem, "compiled_kernels", None)
+    cp = hook() if (hook is not None and monitor is None) else None
+    if cp is None:
+        return None
+    from .engine import CompiledStepper
+
+    return CompiledStepper(cp, tab)
+
+
+def _advance_compiled(stepper, t: float, y, stop: float, dt: float, n: int, max_increment_angle: float,
+                      stats: Stats):
+    """``n`` steps from ``(t, y)`` to ``stop`` in one call of the compiled engine; counts
+    and errors as in the step loop of :func:`integrate_fixed`. Returns ``(t, y)``."""
     res = stepper.advance(t, y, stop, dt, n, max_increment_angle)
     stats.accept_many(res.steps, res.h_min, res.h_max)
     stats.quadrature += res.quadrature
-    stats.rhs_evals += tab.stages * (res.steps + (res.status != "ok"))
+    stats.rhs_evals += res.rhs_evals
     if res.status == "non-finite":
         raise _blow_up(res.t_fail, stats.steps + 1)
     if res.status == "angle":
@@ -107,9 +119,9 @@ def integrate_fixed(
     t_out : array_like, optional
         Output times in ``(t0, t_end]``; ``t_end`` is always one.
     monitor : callable, optional
-        ``monitor(t, y, stats)`` after every step. Without one, a problem's compiled
-        stepper (:meth:`Problem.compiled_stepper`, if it has one) takes all the steps
-        between two output times in one call.
+        ``monitor(t, y, stats)`` after every step. Without one, the compiled engine
+        takes all the steps between two output times in one call when the problem has
+        compiled kernels (:meth:`Problem.compiled_kernels`).
     max_increment_angle : float
         A step whose rotational increment exceeds this angle raises
         :class:`StepSizeError` (dt too large for the rotation rate).
@@ -125,9 +137,7 @@ def integrate_fixed(
         raise ValueError(f"dt must be positive, got {dt!r}")
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    # duck-typed problems (no Problem base class) have no compiled stepper
-    hook = getattr(problem, "compiled_stepper", None)
-    stepper = hook(tab) if (hook is not None and monitor is None) else None
+    stepper = _compiled(problem, tab, monitor)
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
@@ -140,7 +150,7 @@ def integrate_fixed(
         # steps of dt from the last stop; the last one lands exactly on ``stop``
         n = max(1, int(np.ceil((stop - t) / dt - 1e-9)))
         if stepper is not None:
-            t, y = _advance_compiled(stepper, tab, t, y, stop, dt, n, max_increment_angle, stats)
+            t, y = _advance_compiled(stepper, t, y, stop, dt, n, max_increment_angle, stats)
             if observer is not None:
                 observer(t, y)
             continue
@@ -201,24 +211,22 @@ def integrate_adaptive(
     h_max: float = np.inf,
     max_steps: int = 10_000_000,
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
-    safety: float = 0.9,
-    fac_min: float = 0.2,
-    fac_max: float = 5.0,
+    controller: PIController = DEFAULT_CONTROLLER,
     stats: Stats | None = None,
 ):
     """Integrate with an embedded pair and PI step-size control.
 
     The local error ``h sum (b - b_hat) k`` is measured in the increment space with
-    the RMS norm of ``err / (atol + rtol * scale)``. The controller is the PI law
-    ``h_new = h * safety * err^(-0.7/k) * err_prev^(0.4/k)`` with ``k = min(order,
-    order_hat) + 1`` (Hairer-Wanner II, IV.2); rejected steps shrink by
-    ``safety * err^(-1/k)``. Steps whose rotational increment exceeds
+    the RMS norm of ``err / (atol + rtol * scale)``. The step size follows
+    ``controller`` (:class:`~.controller.PIController`: ``h_new = h * safety *
+    err^(-0.7/k) * err_prev^(0.4/k)`` with ``k = min(order, order_hat) + 1`` by default,
+    Hairer-Wanner II, IV.2). Steps whose rotational increment exceeds
     ``max_increment_angle`` are rejected too (they would approach the 2 pi pole of
     dexpinv). Output times are hit exactly by shortening steps.
 
-    Without a ``monitor``, a problem's compiled adaptive loop
-    (:meth:`Problem.compiled_adaptive`, if it has one) runs all the attempts between
-    two output times in one call, with the same arithmetic, controller and limits.
+    Without a ``monitor``, the compiled engine runs all the attempts between two output
+    times in one call when the problem has compiled kernels
+    (:meth:`Problem.compiled_kernels`), with the same arithmetic, controller and limits.
 
     Returns
     -------
@@ -231,18 +239,15 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    # duck-typed problems (no Problem base class) have no compiled loop
-    hook = getattr(problem, "compiled_adaptive", None)
-    stepper = hook(tab) if (hook is not None and monitor is None) else None
+    stepper = _compiled(problem, tab, monitor)
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
     f0 = None  # f(t, y) of the current state, once known (FSAL pairs; kept over rejections)
-    k = min(tab.order, tab.order_hat) + 1
-    beta1, beta2 = 0.7 / k, 0.4 / k
+    gains = controller.gains(tab)
     t, y = t0, y0
     h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
-    err_prev = 1e-4
+    err_prev = controller.err_floor
     if observer is not None:
         observer(t, y)
     start = time.perf_counter()
@@ -251,11 +256,11 @@ def integrate_adaptive(
         stop = stops[i_stop]
         if stepper is not None:  # every attempt up to ``stop`` in one compiled call
             res = stepper.advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps - stats.steps,
-                                     max_increment_angle, safety, fac_min, fac_max)
+                                     max_increment_angle, gains)
             stats.accept_many(res.steps, res.h_min, res.h_max)
             stats.quadrature += res.quadrature
             stats.rejected += res.rejected
-            stats.rhs_evals += tab.stages * res.attempts
+            stats.rhs_evals += res.rhs_evals
             t, y, h, err_prev = res.t, res.y, res.h, res.err_prev
             if res.status == "max-steps":
                 raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
@@ -285,9 +290,7 @@ def integrate_adaptive(
             stats.accept(h_try)
             if Q is not None:
                 stats.quadrature += step_quadrature(tab, Q, h_try)
-            fac = safety * err ** (-beta1) * err_prev**beta2 if err > 0 else fac_max
-            h = min(h_max, h_try * min(fac_max, max(fac_min, fac)))
-            err_prev = max(err, 1e-4)
+            h, err_prev = h_accepted(err, err_prev, h_try, h_max, gains)
             if monitor is not None:
                 monitor(t, y, stats)
             if land:
@@ -296,10 +299,7 @@ def integrate_adaptive(
                 i_stop += 1
         else:
             stats.rejected += 1
-            fac = (safety * err ** (-1.0 / k) if err > 0 else 1.0) if np.isfinite(err) else fac_min
-            if angle > max_increment_angle:
-                fac = min(fac, 0.5 * max_increment_angle / angle)
-            h = h_try * min(1.0, max(fac_min, fac))
+            h = h_rejected(err, angle, h_try, max_increment_angle, gains)
             if h < 1e-14 * max(1.0, abs(t)):
                 raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
     stats.wall_time_s += time.perf_counter() - start

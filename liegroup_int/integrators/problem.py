@@ -27,7 +27,8 @@ from ..groups import LieGroup
 
 @dataclass(frozen=True)
 class Advance:
-    """What a compiled fixed-step loop reports back (see :meth:`Problem.compiled_stepper`).
+    """What the compiled engine's fixed-step loop reports back
+    (:meth:`~liegroup_int.integrators.engine.CompiledStepper.advance`).
 
     Attributes
     ----------
@@ -48,6 +49,8 @@ class Advance:
         Rotation angle of the failed step's increment (``"angle"`` only).
     quadrature : float
         ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
+    rhs_evals : int
+        Vector-field evaluations made (the failed step's included).
     """
 
     y: object
@@ -59,12 +62,14 @@ class Advance:
     t_fail: float
     angle: float
     quadrature: float = 0.0
+    rhs_evals: int = 0
 
 
 
 @dataclass(frozen=True)
 class AdaptiveAdvance:
-    """What a compiled adaptive loop reports back (see :meth:`Problem.compiled_adaptive`).
+    """What the compiled engine's adaptive loop reports back
+    (:meth:`~liegroup_int.integrators.engine.CompiledStepper.advance_to`).
 
     Attributes
     ----------
@@ -88,6 +93,8 @@ class AdaptiveAdvance:
         ``1e-14 max(1, |t|)``.
     quadrature : float
         ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
+    rhs_evals : int
+        Vector-field evaluations made.
     """
 
     y: object
@@ -101,6 +108,7 @@ class AdaptiveAdvance:
     h_max: float
     status: str
     quadrature: float = 0.0
+    rhs_evals: int = 0
 
 
 class Problem(ABC):
@@ -143,32 +151,15 @@ class Problem(ABC):
         """Largest rotation angle carried by the increment ``u`` (0 if none)."""
         return 0.0
 
-    def compiled_stepper(self, tab):
-        """An optional compiled fixed-step loop for the tableau ``tab``, or ``None``.
+    def compiled_kernels(self):
+        """Optional compiled kernels for the engine
+        (:class:`~liegroup_int.integrators.engine.CompiledProblem`), or ``None``.
 
-        A stepper has ``advance(t_start, y, t_stop, dt, n_steps, max_angle) ->``
-        :class:`Advance`, taking up to ``n_steps`` steps on the grid of
-        :func:`~liegroup_int.integrators.drivers.integrate_fixed` (step ``i`` ends at
-        ``t_start + (i + 1) dt``, the last one at ``t_stop``) with the same arithmetic as
-        :func:`~liegroup_int.integrators.rkmk.rkmk_step` plus :meth:`end_step`, and
-        stopping before the first step whose increment is non-finite or rotates by more
-        than ``max_angle``. The fixed-step driver uses it when no per-step monitor is
-        given. Default: ``None`` (the generic path).
-        """
-        return None
-
-    def compiled_adaptive(self, tab):
-        """An optional compiled adaptive loop for the embedded pair ``tab``, or ``None``.
-
-        It has ``advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left,
-        max_angle, safety, fac_min, fac_max) ->`` :class:`AdaptiveAdvance`, running the
-        accepted and rejected steps of
-        :func:`~liegroup_int.integrators.drivers.integrate_adaptive` from ``(t, y)`` until
-        it lands on the output time ``stop``, with the same step arithmetic
-        (:func:`~liegroup_int.integrators.rkmk.rkmk_step`, :meth:`end_step`), error
-        norm (:meth:`increment_scale`), rotation guard, controller, landing rule and
-        limits. The adaptive driver uses it when no per-step monitor is given.
-        Default: ``None`` (the generic path).
+        With them, and no per-step monitor, the drivers run all the steps between two
+        output times in one call of the compiled engine
+        (:mod:`liegroup_int.integrators.engine`), which must give the same steps as
+        :meth:`increment_rate`, :meth:`action`, :meth:`end_step`, :meth:`increment_scale`
+        and :meth:`rotation_angle` to round-off. Default: ``None`` (the generic path).
         """
         return None
 
@@ -257,15 +248,16 @@ class GroupProblem(Problem):
             return self._compiled.rotation_angle(u)
         return float(np.max(self.space.rotation_angle(u), initial=0.0))
 
-    def compiled_stepper(self, tab):
-        """The compiled fixed-step loop when ``f`` is a ``numba.njit`` function and the
-        space has compiled kernels (:class:`~.compiled_group.CompiledGroupStepper`; single
-        points), else ``None``. Subclasses that change the step (their own ``action``,
-        ``dexpinv``, ``increment_rate`` or ``end_step``) keep the generic loop."""
-        from .compiled_group import CompiledGroupStepper, is_compiled_function
+    def compiled_kernels(self):
+        """The engine's kernels for a ``numba.njit`` ``f`` on a space with compiled group
+        kernels (:func:`~.compiled_group.group_problem_kernels`; single points), else
+        ``None``. Subclasses that change the step (their own ``action``, ``dexpinv``,
+        ``increment_rate``, ``end_step`` or ``vector_field``) keep the generic loop."""
+        from .compiled_group import group_problem_kernels, is_compiled_function
 
-        own = ("action", "dexpinv", "increment_rate", "end_step", "vector_field")
+        own = ("action", "dexpinv", "increment_rate", "end_step", "vector_field", "increment_scale",
+               "rotation_angle")
         if (self._compiled is None or not is_compiled_function(self.f)
                 or any(getattr(type(self), m) is not getattr(GroupProblem, m) for m in own)):
             return None
-        return CompiledGroupStepper(self, tab)
+        return group_problem_kernels(self)

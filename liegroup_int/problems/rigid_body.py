@@ -139,30 +139,28 @@ class RigidBody:
 
 
 class RigidBodyProblem(GroupProblem):
-    """``GroupProblem(SO3 x R3, body.vector_field)`` with a compiled fixed-step loop.
+    """``GroupProblem(SO3 x R3, body.vector_field)`` with compiled kernels.
 
-    :meth:`compiled_stepper` returns a
-    :class:`~liegroup_int.problems.rigid_body_numba.FusedRigidBodyStepper` (numba) that
-    ``integrate_fixed`` uses between output times when no per-step monitor is given.
+    :meth:`compiled_kernels` hands the compiled engine the body's vector field
+    (:mod:`.rigid_body_numba`), so that the drivers run all the steps between two output
+    times in one compiled call when no per-step monitor is given.
     """
 
     def __init__(self, body: RigidBody):
         super().__init__(SPACE, body.vector_field)
         self.body = body
 
-    def compiled_stepper(self, tab):
-        """The fused loop for ``tab``, or ``None`` (generic path) when it would not
-        reproduce this problem: numba missing, a subclass of this class or of
-        :class:`RigidBody` overriding the dynamics, or ``f``/``space`` replaced."""
+    def compiled_kernels(self):
+        """The engine's kernels, or ``None`` (generic path) when they would not reproduce
+        this problem: a subclass of this class or of :class:`RigidBody` overriding the
+        dynamics, or ``f``/``space`` replaced."""
         cls = type(self.body)
         if not (type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
                 and all(getattr(cls, k) is getattr(RigidBody, k) for k in ("vector_field", "_I", "_mgchi"))):
             return None
-        try:
-            from .rigid_body_numba import FusedRigidBodyStepper
-        except ImportError:  # numba not installed
-            return None
-        return FusedRigidBodyStepper(self.body, tab)
+        from .rigid_body_numba import compiled_problem
+
+        return compiled_problem(self.body, SPACE)
 
 
 def axisymmetric_free_rotation(I1: float, I3: float, R0: np.ndarray, W0: np.ndarray, t: np.ndarray):

@@ -1,4 +1,4 @@
-"""First-same-as-last reuse in the generic drivers.
+"""First-same-as-last reuse in the generic drivers and in the compiled engine.
 
 For an FSAL pair the last row of A is b, so the last stage state is the step's end state;
 with reuse it is taken as such, and its vector field serves the next step. That saves one
@@ -35,13 +35,47 @@ def test_adaptive_fsal_saves_an_evaluation_per_attempt_and_changes_nothing(metho
     for reuse, cls in ((True, RigidBodyProblem), (False, NoReuse)):
         pb = cls(body)
         assert pb.fsal_reuse is reuse
-        runs[reuse] = integrate_adaptive(pb, tab, (0.0, 1.0), y0, rtol=1e-8, atol=1e-10, t_out=[0.5])
+        # a monitor keeps the generic loop (the compiled engine is tested below)
+        runs[reuse] = integrate_adaptive(pb, tab, (0.0, 1.0), y0, rtol=1e-8, atol=1e-10, t_out=[0.5],
+                                         monitor=lambda *a: None)
     (_, ya, sa), (_, yb, sb) = runs[True], runs[False]
     np.testing.assert_allclose(ya, yb, rtol=0, atol=0 if method != "rkmk65" else 1e-12)
     attempts = sa.steps + sa.rejected
     assert (sa.steps, sa.rejected) == (sb.steps, sb.rejected) and attempts > 10
     assert sb.rhs_evals == tab.stages * attempts
     assert sa.rhs_evals == (tab.stages - 1) * attempts + 1
+
+
+@pytest.mark.parametrize("method", ["rkmk32", "rkmk45", "rkmk65"])
+def test_compiled_engine_reuses_the_last_stage(method, monkeypatch):
+    """The engine's FSAL: one evaluation less per attempt, the first attempt of each
+    compiled call (one per output interval) evaluates f; the same numbers as without
+    reuse (bit for bit for rkmk32/rkmk45, 1e-12 for rkmk65) and as the generic loop
+    (to round-off: compiled sums against NumPy's)."""
+    from liegroup_int.integrators import engine
+
+    body, y0 = _top()
+    tab = resolve_method(method)
+    runs = {}
+    original = engine.CompiledStepper.__init__
+    for reuse in (True, False):
+        def init(self, cp, tab_, reuse=reuse):
+            original(self, cp, tab_)
+            self.fsal = self.fsal and reuse
+
+        monkeypatch.setattr(engine.CompiledStepper, "__init__", init)
+        runs[reuse] = integrate_adaptive(RigidBodyProblem(body), tab, (0.0, 1.0), y0, rtol=1e-8, atol=1e-10,
+                                         t_out=[0.5])
+    monkeypatch.undo()
+    generic = integrate_adaptive(RigidBodyProblem(body), tab, (0.0, 1.0), y0, rtol=1e-8, atol=1e-10,
+                                 t_out=[0.5], monitor=lambda *a: None)
+    (_, ya, sa), (_, yb, sb) = runs[True], runs[False]
+    np.testing.assert_allclose(ya, yb, rtol=0, atol=0 if method != "rkmk65" else 1e-12)
+    np.testing.assert_allclose(ya, generic[1], rtol=0, atol=1e-11)
+    attempts = sa.steps + sa.rejected
+    assert (sa.steps, sa.rejected) == (sb.steps, sb.rejected) == (generic[2].steps, generic[2].rejected)
+    assert sb.rhs_evals == tab.stages * attempts
+    assert sa.rhs_evals == (tab.stages - 1) * attempts + 2  # two output intervals, two compiled calls
 
 
 def test_fixed_step_fsal_and_non_fsal_methods():

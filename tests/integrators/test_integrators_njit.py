@@ -1,5 +1,6 @@
-"""A user's ``numba.njit`` vector field on each built-in group: the whole fixed-step loop
-runs compiled (integrators/compiled_group.py) and agrees with the generic Python path.
+"""A user's ``numba.njit`` vector field on each built-in group: the whole fixed-step and
+adaptive loops run in the compiled engine (integrators/engine.py, compiled_group.py) and
+agree with the generic Python path.
 
 Tolerance 1e-12: the same step arithmetic (stage combinations in the same order, the groups'
 compiled kernels against the same kernels called from Python); what differs is the
@@ -77,7 +78,7 @@ CASES = {
 def test_compiled_loop_agrees_with_the_python_path(name):
     space, f, y0 = CASES[name]
     pb = GroupProblem(space, f)
-    assert pb.compiled_stepper(__import__("liegroup_int").integrators.resolve_method("rkmk4")) is not None
+    assert pb.compiled_kernels() is not None
     a = integrate(pb, y0, (0.0, 0.5), method="rkmk4", dt=1e-3, t_eval=[0.25])
     b = integrate(GroupProblem(space, f.py_func), y0, (0.0, 0.5), method="rkmk4", dt=1e-3, t_eval=[0.25])
     assert a.stats.steps == b.stats.steps == 500 and a.stats.rhs_evals == b.stats.rhs_evals
@@ -86,9 +87,52 @@ def test_compiled_loop_agrees_with_the_python_path(name):
         np.testing.assert_allclose(ya, yb, rtol=0, atol=1e-12 * max(1.0, np.abs(yb).max()))
 
 
-def test_compiled_loop_order():
-    """RKMK4 on the free body, errors at t = 1 against RKMK6 at h = 1e-3: slope 4 +- 0.3."""
+@pytest.mark.parametrize("method", ["rkmk45", "rkmk65"])
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_compiled_adaptive_loop_agrees_with_the_python_path(name, method):
+    """Same accepted and rejected steps, states to 1e-12 (relative); FSAL saves one
+    evaluation per attempt on both paths (the engine evaluates f once more at the start of
+    each output interval: two here)."""
+    space, f, y0 = CASES[name]
+    tab_stages = {"rkmk45": 7, "rkmk65": 9}[method]
+    a = integrate(GroupProblem(space, f), y0, (0.0, 1.0), method=method, rtol=1e-8, atol=1e-10, t_eval=[0.5])
+    b = integrate(GroupProblem(space, f.py_func), y0, (0.0, 1.0), method=method, rtol=1e-8, atol=1e-10,
+                  t_eval=[0.5])
+    assert (a.stats.steps, a.stats.rejected) == (b.stats.steps, b.stats.rejected) and a.stats.steps > 5
+    attempts = a.stats.steps + a.stats.rejected
+    assert a.stats.rhs_evals == (tab_stages - 1) * attempts + 2
+    assert b.stats.rhs_evals == (tab_stages - 1) * attempts + 1
+    for ya, yb in zip(a.y, b.y):
+        np.testing.assert_allclose(ya, yb, rtol=0, atol=1e-12 * max(1.0, np.abs(yb).max()))
+
+
+def test_compiled_adaptive_tolerance_proportionality():
+    """rkmk45 through the engine: the global error at t = 1 falls with the tolerance
+    (fitted slope of log error against log rtol between 0.7 and 1.2 over 1e-5..1e-9: a
+    controlled error, per the local error per unit step)."""
     space, f, y0 = CASES["SO3xR3"]
+    ref = integrate(f, y0, (0.0, 1.0), space=space, method="rkmk6", dt=1e-3).y_final
+    tols = np.array([1e-5, 1e-6, 1e-7, 1e-8, 1e-9])
+    errs = [np.abs(integrate(f, y0, (0.0, 1.0), space=space, method="rkmk45", rtol=r, atol=r * 1e-2).y_final
+                   - ref).max() for r in tols]
+    slope = np.polyfit(np.log(tols), np.log(errs), 1)[0]
+    assert 0.7 < slope < 1.2 and max(errs) < 1e-3, (errs, slope)
+
+
+@njit
+def _wrong_shape(t, y):
+    return np.zeros(2)
+
+
+def test_a_wrong_shape_from_f_is_a_clear_error():
+    with pytest.raises(ValueError, match=r"shape \(space.dim,\)"):
+        integrate(_wrong_shape, np.eye(3), (0.0, 0.01), space=SO3, method="rkmk4", dt=1e-3)
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_compiled_loop_order(name):
+    """RKMK4 through the engine, errors at t = 1 against RKMK6 at h = 1e-3: slope 4 +- 0.3."""
+    space, f, y0 = CASES[name]
     ref = integrate(f, y0, (0.0, 1.0), space=space, method="rkmk6", dt=1e-3).y_final
     hs = np.array([0.04, 0.02, 0.01])
     errs = [np.abs(integrate(f, y0, (0.0, 1.0), space=space, method="rkmk4", dt=h).y_final - ref).max() for h in hs]

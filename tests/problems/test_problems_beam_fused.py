@@ -1,7 +1,7 @@
 """Beam plugin: the fused compiled fixed-step loop against the generic driver loop.
 
 ``integrate_fixed`` hands the steps between output times to
-``BeamProblem.compiled_stepper(tab)`` (``backend="numba"``) when no per-step monitor is
+the compiled engine (``BeamProblem.compiled_kernels()``, ``backend="numba"``) when no per-step monitor is
 given; with a monitor it runs its generic loop over the same compiled stage kernels.
 The two differ only in how the stage combinations and the Newton-Schulz end step are
 summed (compiled loops against NumPy/BLAS), i.e. by round-off, so the states agree to
@@ -18,7 +18,8 @@ import pytest
 from liegroup_int.integrators import (METHODS, BlowUpError, IntegrationError, Problem, Stats, StepSizeError,
                                       integrate_fixed, resolve_method)
 from liegroup_int.problems.beam import BeamProblem
-from liegroup_int.problems.beam.kernels_numba import FusedBeamStepper, profile_row, profile_value
+from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.problems.beam.kernels_numba import profile_row, profile_value
 from liegroup_int.problems.beam.model import EndLoad, Loads, Profile
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
@@ -85,23 +86,23 @@ def scene(request):
 
 def test_the_stepper_exists_only_where_it_should(scene):
     _, pb, _ = scene
-    assert pb.compiled_stepper(TAB) is not None
+    assert compiled_stepper(pb, TAB) is not None
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy",
                         formulation=pb.formulation)
-    assert np_pb.compiled_stepper(TAB) is None
+    assert compiled_stepper(np_pb, TAB) is None
 
 
 @pytest.fixture
 def advance_calls(monkeypatch):
     """Counts the calls of the fused loop."""
     calls = []
-    original = FusedBeamStepper.advance
+    original = CompiledStepper.advance
 
     def counted(self, *args):
         calls.append(args[4])  # n_steps
         return original(self, *args)
 
-    monkeypatch.setattr(FusedBeamStepper, "advance", counted)
+    monkeypatch.setattr(CompiledStepper, "advance", counted)
     return calls
 
 
@@ -256,13 +257,13 @@ def test_unusual_profiles_fall_back_to_the_generic_loop():
     for prof in (Doubled("step", t_off=1.0), unsorted):
         loads = Loads(end=EndLoad(force=(0.0, 0.0, -100.0), force_profile=prof))
         nb = BeamProblem(pb.space, pb.constants, pb.bcs, loads, pb.initial, backend="numba")
-        assert nb.compiled_stepper(TAB) is None
+        assert compiled_stepper(nb, TAB) is None
         _, y, stats = integrate_fixed(nb, TAB, (0.0, 3 * dt), nb.initial_state(), dt)
         assert stats.steps == 3 and nb.is_finite(y)
 
 
 def test_default_hook_and_stats():
-    assert Problem.compiled_stepper(None, TAB) is None
+    assert Problem.compiled_kernels(None) is None and compiled_stepper(object(), TAB) is None
     st = Stats()
     st.accept_many(0, np.inf, 0.0)
     assert st.steps == 0 and st.h_min == np.inf and st.h_max == 0.0

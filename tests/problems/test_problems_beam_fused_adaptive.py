@@ -1,7 +1,7 @@
 """Beam plugin: the fused compiled adaptive loop against the generic adaptive loop.
 
 ``integrate_adaptive`` hands all attempts between two output times to
-``BeamProblem.compiled_adaptive(tab)`` (``backend="numba"``) when no per-step monitor
+the compiled engine (``BeamProblem.compiled_kernels()``, ``backend="numba"``) when no per-step monitor
 is given. The compiled loop sums the stage combinations, the error norm and the
 Newton-Schulz end step in plain sequential order, the generic loop with NumPy/BLAS.
 With the generic loop's summations replaced by the same sequential order
@@ -23,7 +23,8 @@ import liegroup_int.integrators.rkmk as rkmk
 from liegroup_int.integrators import (IntegrationError, Problem, StepSizeError, Stats, integrate_adaptive,
                                       resolve_method)
 from liegroup_int.problems.beam import BeamProblem
-from liegroup_int.problems.beam.kernels_numba import FusedBeamAdaptive, _newton_schulz
+from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.problems.beam.kernels_numba import _newton_schulz
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
 
@@ -83,13 +84,13 @@ def sequential_sums(monkeypatch):
 @pytest.fixture
 def adaptive_calls(monkeypatch):
     calls = []
-    original = FusedBeamAdaptive.advance_to
+    original = CompiledStepper.advance_to
 
     def counted(self, *args, **kw):
         calls.append(args[2])  # stop
         return original(self, *args, **kw)
 
-    monkeypatch.setattr(FusedBeamAdaptive, "advance_to", counted)
+    monkeypatch.setattr(CompiledStepper, "advance_to", counted)
     return calls
 
 
@@ -214,8 +215,10 @@ def test_limits_and_rejections_match_the_generic_loop(case, sequential_sums):
 
 def test_the_hook_exists_only_where_it_should():
     pb, _ = _scene("cantilever")
-    assert isinstance(pb.compiled_adaptive(resolve_method("rkmk45")), FusedBeamAdaptive)
-    assert pb.compiled_adaptive(resolve_method("rkmk4")) is None  # no embedded pair
+    assert isinstance(compiled_stepper(pb, resolve_method("rkmk45")), CompiledStepper)
+    with pytest.raises(ValueError, match="no embedded pair"):  # a fixed-step method has no adaptive loop
+        compiled_stepper(pb, resolve_method("rkmk4")).advance_to(0.0, pb.initial_state(), 1.0, 0.1, 1e-4, 1e-6,
+                                                                   1e-9, 1.0, 10, 1.0, ())
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy")
-    assert np_pb.compiled_adaptive(resolve_method("rkmk45")) is None
-    assert Problem.compiled_adaptive(None, resolve_method("rkmk45")) is None
+    assert compiled_stepper(np_pb, resolve_method("rkmk45")) is None
+    assert Problem.compiled_kernels(None) is None

@@ -1,7 +1,7 @@
 """Rigid body: the fused compiled fixed-step loop against the generic driver loop.
 
 ``integrate_fixed`` hands the steps between output times to
-``RigidBodyProblem.compiled_stepper(tab)`` (numba) when no per-step monitor is given;
+the compiled engine (``RigidBodyProblem.compiled_kernels()``, numba) when no per-step monitor is given;
 with a monitor it runs its generic NumPy loop. Both evaluate the same formulas; they
 differ only in the order of a few 3-term sums (``einsum``/BLAS against explicit loops),
 i.e. by round-off: measured <= 2.3e-14 relative (max-norm over the state) in the runs of
@@ -27,7 +27,7 @@ from liegroup_int.integrators import (
 )
 from liegroup_int.integrators.problem import GroupProblem
 from liegroup_int.problems import RigidBody, RigidBodyProblem
-from liegroup_int.problems.rigid_body_numba import FusedRigidBodyStepper
+from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
 
 TOL = 1e-13
 FREE = RigidBody(inertia=(1.0, 2.0, 2.5))
@@ -71,14 +71,15 @@ def _run(body, y0, t_span, dt, fused, tab=TAB, t_out=None, max_angle=1.0):
         return exc, stats, rec
 
 
-def _same_stats(a, b, tab=None):
-    """Equal counters. The compiled loop evaluates every stage; the generic loop reuses the
-    last stage of an FSAL pair as the next first one (one evaluation less per step after
-    the first), so for those ``b.rhs_evals`` is ``(stages - 1) steps + 1``."""
+def _same_stats(a, b, tab=None, calls=1):
+    """Equal counters. Both loops reuse the last stage of an FSAL pair as the next first one
+    (one evaluation less per step); the generic loop keeps it across output times
+    (``(stages - 1) steps + 1``), the compiled engine starts each of its ``calls`` (one per
+    output interval) with an evaluation."""
     da, db = a.as_dict(), b.as_dict()
     da.pop("wall_time_s"), db.pop("wall_time_s")
     if tab is not None and tab.fsal:
-        assert da.pop("rhs_evals") == tab.stages * a.steps
+        assert da.pop("rhs_evals") == (tab.stages - 1) * a.steps + calls
         assert db.pop("rhs_evals") == (tab.stages - 1) * b.steps + 1
     assert da == db
 
@@ -90,7 +91,7 @@ def _rel(a, b):
 def test_the_stepper_exists_only_where_it_should():
     pb = TOP.problem()
     assert isinstance(pb, RigidBodyProblem) and isinstance(pb, GroupProblem)
-    assert isinstance(pb.compiled_stepper(TAB), FusedRigidBodyStepper)
+    assert isinstance(compiled_stepper(pb, TAB), CompiledStepper)
 
     class Damped(RigidBody):  # user-defined torque: the generic path must run it
         def vector_field(self, t, y):
@@ -98,16 +99,16 @@ def test_the_stepper_exists_only_where_it_should():
             out[..., 3:] -= 0.1 * self.split(y)[1]
             return out
 
-    assert Damped(inertia=(1.0, 2.0, 2.5)).problem().compiled_stepper(TAB) is None
+    assert compiled_stepper(Damped(inertia=(1.0, 2.0, 2.5)).problem(), TAB) is None
     replaced = TOP.problem()
     replaced.f = lambda t, y: TOP.vector_field(t, y)
-    assert replaced.compiled_stepper(TAB) is None
+    assert compiled_stepper(replaced, TAB) is None
 
     class Custom(RigidBodyProblem):
         def end_step(self, y):
             return y
 
-    assert Custom(TOP).compiled_stepper(TAB) is None
+    assert compiled_stepper(Custom(TOP), TAB) is None
 
 
 @pytest.mark.parametrize("batch", [(), (5,), (2, 3)], ids=["single", "batch5", "batch2x3"])
@@ -123,7 +124,7 @@ def test_every_tableau_agrees_with_the_generic_loop(method, kind, batch):
     np.testing.assert_array_equal(y0, keep)  # the start state is not modified
     assert t1 == t2 == 1.0 and y1.shape == y2.shape == y0.shape
     assert rec1.t == rec2.t
-    _same_stats(st1, st2, tab)
+    _same_stats(st1, st2, tab, calls=len(t_out) + 1)
     for a, b in zip(rec1.y, rec2.y):
         assert _rel(a, b) <= TOL, f"{method}/{kind}{batch}: relative difference {_rel(a, b):.2e}"
 
@@ -168,7 +169,7 @@ def test_errors_match_the_generic_loop(case):
     else:
         body, y0, dt, T, max_angle, expected = TOP, _states(TOP), 0.1, 5.0, 0.05, StepSizeError
     if max_angle is None:  # just above the first step's increment angle
-        first = TOP.problem().compiled_stepper(TAB).advance(0.0, y0, dt, dt, 1, 0.0)
+        first = compiled_stepper(TOP.problem(), TAB).advance(0.0, y0, dt, dt, 1, 0.0)
         assert first.status == "angle" and first.steps == 0
         max_angle = first.angle * 1.02
     got = {}
@@ -187,7 +188,7 @@ def test_errors_match_the_generic_loop(case):
 
 
 def test_advance_contract():
-    st = TOP.problem().compiled_stepper(TAB)
+    st = compiled_stepper(TOP.problem(), TAB)
     y0 = _states(TOP, (2,))
     res = st.advance(0.0, y0, 0.1, 0.03, 4, 1.0)  # steps end at 0.03, 0.06, 0.09, 0.1
     assert res.status == "ok" and res.steps == 4 and res.t == 0.1 and res.y.shape == (2, 12)

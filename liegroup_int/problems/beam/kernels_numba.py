@@ -14,12 +14,11 @@ one loop over the collocation points per call:
   sweep runs in the same loop; then the backward (``U``) sweep writes the ``(4, n, 3)``
   rate.
 * :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
-* :func:`advance_kernel`: many fixed RKMK steps in one call (the driver's grid, the
-  stage combinations in the cancellation-safe form of ``rkmk.combine``, time profiles of
-  the loads evaluated per stage time by :func:`profile_value`, the Newton-Schulz end
-  step, the finiteness and rotation-angle checks), on work arrays allocated once per
-  call. :class:`FusedBeamStepper` wraps it for ``BeamProblem.compiled_stepper``, which
-  ``integrate_fixed`` uses between output times when no per-step monitor is given.
+* ``engine_*``: the kernels the compiled engine (:mod:`liegroup_int.integrators.engine`)
+  runs its fixed-step and adaptive loops with (:data:`ENGINE_KERNELS`,
+  :meth:`NumbaBeamKernels.compiled_problem`): stage rate with the loads' time profiles
+  evaluated per stage time by :func:`profile_value`, action, Newton-Schulz end step,
+  rotation angle, error scale; the state as the tuple ``(c, v, w, R, K, K_s)``.
 
 SO(3) coefficients use the branch logic of :mod:`liegroup_int.groups.so3_coefficients`:
 the 12-term Horner polynomial in ``theta**2`` with the same float coefficients
@@ -65,8 +64,7 @@ import numpy as np
 from numba import njit
 
 from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
-from ...integrators.combine_numba import combine_into as _combine
-from ...integrators.problem import AdaptiveAdvance, Advance
+from ...integrators.engine import CompiledProblem, EngineKernels
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
 #: Measured (cantilever p = 4, whole stage-rate kernel, best of 30 x 500 calls):
@@ -901,10 +899,7 @@ def rotation_angle_kernel(u, sf, si):
     return best
 
 
-# ====================================================================== fused fixed-step loop
-# Status codes of :func:`advance_kernel` (the driver turns them into its exceptions).
-ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
-
+# ====================================================================== time profiles of loads
 # Load-profile encoding (one row per time-dependent load, see :func:`profile_row`):
 # kind code, t_on, t_off, ramp, number of table points m, table times (m), factors (m).
 _PROFILE_KINDS = {"constant": 0, "step": 1, "ramp": 2, "smooth": 3, "table": 4}
@@ -994,237 +989,82 @@ def _all_finite(x):
     return True
 
 
-@njit(cache=True, fastmath=False)
-def _step_workspace(c, v, w, R, K, Ks, s, si):
-    """Work arrays of a fused step loop, allocated once per call: the ``(n, X_COLS)``
-    stage buffer, ``s`` stage rates, the increment, a zero increment, a copy of the start state
-    and two spare states (stage state, next state)."""
-    n = c.shape[0]
-    st0 = (c.copy(), v.copy(), w.copy(), R.copy(), K.copy(), Ks.copy())
-    st1 = (np.empty_like(c), np.empty_like(v), np.empty_like(w), np.empty_like(R), np.empty_like(K),
-           np.empty_like(Ks))
-    st2 = (np.empty_like(c), np.empty_like(v), np.empty_like(w), np.empty_like(R), np.empty_like(K),
-           np.empty_like(Ks))
-    width = X_COLS if si[_H_FORM] == FORM_MIXED else _X_NM  # primal: the 12 right-hand sides only
-    return np.empty((n, width)), np.empty((s, 4, n, 3)), np.empty((4, n, 3)), np.zeros((4, n, 3)), st0, st1, st2
-
-
-@njit(cache=True, fastmath=False)
-def _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                    u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h):
-    """One RKMK step of size ``h`` from ``(t, y0)``: the stages of
-    :func:`liegroup_int.integrators.rkmk.compute_stages` into ``Kst`` (loads rewritten
-    into ``sf`` at every stage time; ``y1`` is the stage state), the combined increment
-    into ``u`` and ``y2 = end_step(Lambda(u, y0))`` (Newton-Schulz). ``y0`` is not written.
-    Returns the step's quadrature ``h sum_r b_r P_r`` of the stage powers ``pws`` (0 when
-    the problem's loads do no work)."""
-    s = b.shape[0]
+# ====================================================================== engine kernels
+# The beam's kernels for the compiled engine (liegroup_int.integrators.engine): the state
+# as the tuple (c, v, w, R, K, K_s), increments flat (12 n) seen as (4, n, 3), and
+# ``data = (sf, si, fixp, fixr, x, lpos, lvec, lprof, pw)`` (:meth:`NumbaBeamKernels.compiled_problem`).
+@njit(cache=True, fastmath=False, inline="always")
+def engine_rate(data, t, y, u, out):
+    """Stage rate at ``(t, y)`` with increment ``u`` into ``out`` (loads at ``t``); returns
+    the external power (0 unless the problem computes it)."""
+    sf, si, fixp, fixr, x, lpos, lvec, lprof, pw = data
     _set_loads(sf, lpos, lvec, lprof, t)
-    rates_into(c0, v0, w0, R0, K0, Ks0, zero, sf, si, fixp, fixr, x, Kst[0], pws[0:1])
-    for r in range(1, s):
-        _combine(A[r], r, cc[r], Kf, h, uf)
-        action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
-        _set_loads(sf, lpos, lvec, lprof, t + cc[r] * h)
-        rates_into(c1, v1, w1, R1, K1, Ks1, u, sf, si, fixp, fixr, x, Kst[r], pws[r:r + 1])
-    _combine(b, s, 1.0, Kf, h, uf)
-    action_kernel(u, c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2, sf, si)
-    _newton_schulz(R2)
-    q = 0.0
-    for r in range(s):
-        q += b[r] * pws[r]
-    return h * q
+    c, v, w, R, K, Ks = y
+    rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw)
+    return pw[0]
 
 
-@njit(cache=True, fastmath=False)
-def advance_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, lpos, lvec, lprof,
-                   t_start, t_stop, dt, n_steps, max_angle):
-    """Up to ``n_steps`` fixed RKMK steps from ``(t_start, y)``, in one compiled call.
-
-    Step ``i`` ends at ``t_stop`` if it is the last one, else at ``t_start + (i + 1) dt``
-    (the grid of :func:`liegroup_int.integrators.drivers.integrate_fixed`). Per step:
-    the stages of :func:`liegroup_int.integrators.rkmk.compute_stages` (loads rewritten
-    into ``sf`` at every stage time), the combined increment, the action, the
-    Newton-Schulz end step, then the driver's checks on the increment: all finite, and
-    rotation angle ``<= max_angle``. The first failing step stops the loop.
-
-    ``y = (c, v, w, R, K, Ks)`` is read, never written. ``sf`` is the caller's private
-    copy of the constant data (its load slots are overwritten). All work arrays are
-    allocated here, once, before the step loop.
-
-    Returns
-    -------
-    (c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, angle, quadrature)
-        The state after the ``steps`` accepted steps and its time ``t``; ``status`` is
-        :data:`ADVANCE_OK` or the failure of the next step (:data:`ADVANCE_NON_FINITE`,
-        :data:`ADVANCE_ANGLE`), which would have ended at ``t_fail`` and carried the
-        rotation ``angle``; ``h_min, h_max`` over the accepted steps (``inf, 0`` if none);
-        ``quadrature``: the work of the loads over the accepted steps.
-    """
-    n, s = c.shape[0], b.shape[0]
-    fixp, fixr = dirichlet_rows(sf, si)
-    x, Kst, u, zero, st0, st1, st2 = _step_workspace(c, v, w, R, K, Ks, s, si)
-    Kf = Kst.reshape((s, 12 * n))
-    uf = u.reshape(12 * n)
-    pws = np.zeros(s)
-    c0, v0, w0, R0, K0, Ks0 = st0
-    c1, v1, w1, R1, K1, Ks1 = st1
-    c2, v2, w2, R2, K2, Ks2 = st2
-    t, h_min, h_max = t_start, np.inf, 0.0
-    quad = 0.0
-    for i in range(n_steps):
-        t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
-        h = t_next - t
-        q = _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                            u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t, h)
-        if not _all_finite(uf):
-            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan, quad
-        ang = rotation_angle_kernel(u, sf, si)
-        if ang > max_angle:
-            return c0, v0, w0, R0, K0, Ks0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang, quad
-        c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
-        t = t_next
-        h_min, h_max = min(h_min, h), max(h_max, h)
-        quad += q
-    return c0, v0, w0, R0, K0, Ks0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad
+@njit(cache=True, fastmath=False, inline="always")
+def engine_action(data, u, y0, y1):
+    """``y1 = Lambda(u, y0)``."""
+    sf, si = data[0], data[1]
+    c0, v0, w0, R0, K0, Ks0 = y0
+    c1, v1, w1, R1, K1, Ks1 = y1
+    action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
 
 
-# ====================================================================== fused adaptive loop
-# Status codes of :func:`adaptive_kernel` (the driver turns them into its exceptions).
-ADAPTIVE_OK, ADAPTIVE_MAX_STEPS, ADAPTIVE_UNDERFLOW = 0, 1, 2
+@njit(cache=True, fastmath=False, inline="always")
+def engine_end_step(data, y):
+    """Newton-Schulz step on the rotations of ``y``, in place (``BeamProblem.end_step``)."""
+    _newton_schulz(y[3])
 
 
-@njit(cache=True, fastmath=False)
-def _nan_max(a, b):
-    """``np.maximum(a, b)``: NaN if either is NaN."""
-    if a >= b or a != a:
-        return a
-    return b
+@njit(cache=True, fastmath=False, inline="always")
+def engine_angle(data, u):
+    """Largest rotation at the collocation points of the increment ``u``."""
+    return rotation_angle_kernel(u, data[0], data[1])
 
 
-@njit(cache=True, fastmath=False)
-def _error_norm(errf, c0, c2, rtol, atol):
-    """:func:`liegroup_int.integrators.rkmk.error_norm` of the flat ``(4, n, 3)`` error
-    ``errf`` with ``BeamProblem.increment_scale``: ``max(|c0|, |c2|)`` on the position
-    component (the first ``3 n`` entries), ones elsewhere."""
-    n = c0.shape[0]
-    acc = 0.0
+@njit(cache=True, fastmath=False, inline="always")
+def engine_scale(data, y, out):
+    """``BeamProblem.increment_scale``: ``|c|`` on the position component, ones elsewhere."""
+    c = y[0]
+    n = c.shape[0]
     for i in range(n):
         for d in range(3):
-            sc = _nan_max(abs(c0[i, d]), abs(c2[i, d]))
-            wv = errf[3 * i + d] / (atol + rtol * sc)
-            acc += wv * wv
-    one = atol + rtol * 1.0
-    for j in range(3 * n, errf.shape[0]):
-        wv = errf[j] / one
-        acc += wv * wv
-    return math.sqrt(acc / errf.shape[0])
+            out[3 * i + d] = abs(c[i, d])
+    for j in range(3 * n, out.shape[0]):
+        out[j] = 1.0
 
 
-@njit(cache=True, fastmath=False)
-def _py_min(a, b):
-    """Python's ``min(a, b)`` (``a`` unless ``b < a``)."""
-    return b if b < a else a
+@njit(cache=True, fastmath=False, inline="always")
+def engine_increment_view(data, u):
+    """The flat increment ``(12 n,)`` as ``(4, n, 3)``."""
+    return u.reshape((4, data[1][_H_N], 3))
 
 
-@njit(cache=True, fastmath=False)
-def _py_max(a, b):
-    """Python's ``max(a, b)`` (``a`` unless ``b > a``)."""
-    return b if b > a else a
+@njit(cache=True, fastmath=False, inline="always")
+def engine_increment_views(data, K):
+    """Rows of flat increments ``(k, 12 n)`` as ``(k, 4, n, 3)``."""
+    return K.reshape((K.shape[0], 4, data[1][_H_N], 3))
 
 
-@njit(cache=True, fastmath=False)
-def _h_accepted(err, err_prev, h_try, h_max, safety, fac_min, fac_max, beta1, beta2):
-    """Next step after an accepted one (PI law of ``integrate_adaptive``): ``(h, err_prev)``."""
-    if err > 0:
-        fac = safety * err ** (-beta1) * err_prev ** beta2
-    else:
-        fac = fac_max
-    h = _py_min(h_max, h_try * _py_min(fac_max, _py_max(fac_min, fac)))
-    return h, _py_max(err, 1e-4)
+@njit(cache=True, fastmath=False, inline="always")
+def engine_new_state(data, y):
+    """Uninitialized arrays like those of ``y``."""
+    return (np.empty_like(y[0]), np.empty_like(y[1]), np.empty_like(y[2]), np.empty_like(y[3]),
+            np.empty_like(y[4]), np.empty_like(y[5]))
 
 
-@njit(cache=True, fastmath=False)
-def _h_rejected(err, ang, h_try, max_angle, safety, fac_min, inv_k_neg):
-    """Retry step after a rejected one (``err`` already ``inf`` if it was not finite)."""
-    if math.isfinite(err):
-        fac = safety * err ** inv_k_neg if err > 0 else 1.0
-    else:
-        fac = fac_min
-    if ang > max_angle:
-        fac = _py_min(fac, 0.5 * max_angle / ang)
-    return h_try * _py_min(1.0, _py_max(fac_min, fac))
-
-
-@njit(cache=True, fastmath=False)
-def adaptive_kernel(c, v, w, R, K, Ks, sf, si, A, b, cc, e, lpos, lvec, lprof,
-                    t, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
-                    safety, fac_min, fac_max, beta1, beta2, inv_k_neg):
-    """Accepted and rejected embedded RKMK steps from ``(t, y)`` until landing on ``stop``,
-    in one compiled call: the loop body of
-    :func:`liegroup_int.integrators.drivers.integrate_adaptive` for one output time.
-
-    Per attempt: the ``max_steps`` check (``max_steps_left`` accepted steps remain), the
-    landing rule (``t + h >= stop - 1e-12 max(1, |stop|)`` -> ``h_try = stop - t``), one
-    step (:func:`_rkmk_step_into`), the embedded error ``h sum e_r k_r`` in the
-    cancellation-safe form, its RMS norm, the rotation angle of the increment; accept
-    if ``err <= 1`` and the angle is within ``max_angle``, then the PI controller
-    (:func:`_h_accepted`), else the rejection rule (:func:`_h_rejected`) and the
-    underflow check ``h < 1e-14 max(1, |t|)``.
-
-    Returns
-    -------
-    (c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quadrature)
-        State and time reached (``stop`` if ``status`` is :data:`ADAPTIVE_OK`), the
-        controller state, the accepted and rejected steps and all attempts of this call,
-        the extreme accepted steps (``inf, 0`` if none), and the status
-        (:data:`ADAPTIVE_MAX_STEPS`, :data:`ADAPTIVE_UNDERFLOW`: ``h`` is the step that
-        underflowed).
-    """
-    n, s = c.shape[0], b.shape[0]
-    fixp, fixr = dirichlet_rows(sf, si)
-    x, Kst, u, zero, st0, st1, st2 = _step_workspace(c, v, w, R, K, Ks, s, si)
-    Kf = Kst.reshape((s, 12 * n))
-    uf = u.reshape(12 * n)
-    errf = np.empty(12 * n)
-    pws = np.zeros(s)
-    quad = 0.0
-    c0, v0, w0, R0, K0, Ks0 = st0
-    c1, v1, w1, R1, K1, Ks1 = st1
-    c2, v2, w2, R2, K2, Ks2 = st2
-    steps, rejected, attempts = 0, 0, 0
-    h_min_acc, h_max_acc = np.inf, 0.0
-    land_tol = 1e-12 * max(1.0, abs(stop))
-    while True:
-        if steps >= max_steps_left:
-            return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                    h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS, quad)
-        land = t + h >= stop - land_tol
-        h_try = stop - t if land else h
-        q = _rkmk_step_into(c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, c2, v2, w2, R2, K2, Ks2,
-                            u, uf, Kst, Kf, x, zero, pws, sf, si, fixp, fixr, A, b, cc, lpos, lvec, lprof, t,
-                            h_try)
-        attempts += 1
-        _combine(e, s, 0.0, Kf, h_try, errf)
-        err = _error_norm(errf, c0, c2, rtol, atol)
-        ang = rotation_angle_kernel(u, sf, si)
-        if not math.isfinite(err):
-            err = np.inf
-        if err <= 1.0 and ang <= max_angle:
-            t = stop if land else t + h_try
-            c0, v0, w0, R0, K0, Ks0, c2, v2, w2, R2, K2, Ks2 = c2, v2, w2, R2, K2, Ks2, c0, v0, w0, R0, K0, Ks0
-            steps += 1
-            quad += q
-            h_min_acc, h_max_acc = _py_min(h_min_acc, h_try), _py_max(h_max_acc, h_try)
-            h, err_prev = _h_accepted(err, err_prev, h_try, h_max, safety, fac_min, fac_max, beta1, beta2)
-            if land:
-                return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                        h_min_acc, h_max_acc, ADAPTIVE_OK, quad)
-        else:
-            rejected += 1
-            h = _h_rejected(err, ang, h_try, max_angle, safety, fac_min, inv_k_neg)
-            if h < 1e-14 * max(1.0, abs(t)):
-                return (c0, v0, w0, R0, K0, Ks0, t, h, err_prev, steps, rejected, attempts,
-                        h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW, quad)
+@njit(cache=True, fastmath=False, inline="always")
+def engine_copy_state(data, src, dst):
+    """``dst <- src`` array by array."""
+    dst[0][:] = src[0]
+    dst[1][:] = src[1]
+    dst[2][:] = src[2]
+    dst[3][:] = src[3]
+    dst[4][:] = src[4]
+    dst[5][:] = src[5]
 
 
 # ====================================================================== Python side
@@ -1429,25 +1269,43 @@ class NumbaBeamKernels:
         solve_kernel(x, self.sf, self.si)
         return x
 
-    def stepper(self, tab, state_cls):
-        """The fused fixed-step loop for ``tab`` (:class:`FusedBeamStepper`), or ``None``
-        when a load profile cannot be evaluated inside the compiled loop."""
+    def compiled_problem(self, state_cls):
+        """What the compiled engine needs (:class:`~liegroup_int.integrators.engine.CompiledProblem`),
+        or ``None`` when a load profile cannot be evaluated inside compiled code (the
+        generic path then calls it in Python).
+
+        The data hold a private copy of ``sf`` (the stage loads are written into it, so the
+        wrappers' load cache stays valid) and the stage work arrays."""
         rows = [profile_row(prof) for _, _, prof in self._profiles]
         if any(r is None for r in rows):
             return None
-        return FusedBeamStepper(self, tab, state_cls, rows)
+        k = len(rows)
+        width = max((r.size for r in rows), default=_PR_TABLE)
+        lpos = np.array([a for a, _, _ in self._profiles], dtype=np.int64).reshape(k)
+        lvec = np.array([vec for _, vec, _ in self._profiles], dtype=float).reshape(k, 3)
+        lprof = np.zeros((k, width))
+        for j, r in enumerate(rows):
+            lprof[j, :r.size] = r
+        sf, si, n = self.sf.copy(), self.si, self.n
+        fixp, fixr = dirichlet_rows(sf, si)
+        x = np.empty((n, X_COLS if si[_H_FORM] == FORM_MIXED else _X_NM))
+        data = (sf, si, fixp, fixr, x, lpos, lvec, lprof, np.zeros(1))
+
+        def pack(y):
+            return tuple(np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s))
+
+        def unpack(arrays):
+            return state_cls(*arrays)
+
+        return CompiledProblem(ENGINE_KERNELS, data, lambda packed: 12 * n, pack, unpack)
 
 
-    def adaptive(self, tab, state_cls):
-        """The fused adaptive loop for the embedded pair ``tab``
-        (:class:`FusedBeamAdaptive`), or ``None`` (no embedded pair, or a load profile
-        that cannot be evaluated inside the compiled loop)."""
-        if tab.e_f is None:
-            return None
-        rows = [profile_row(prof) for _, _, prof in self._profiles]
-        if any(r is None for r in rows):
-            return None
-        return FusedBeamAdaptive(self, tab, state_cls, rows)
+#: The beam's kernels for the compiled engine.
+ENGINE_KERNELS = EngineKernels("beam", engine_rate, engine_action, engine_angle, engine_scale,
+                               end_step=engine_end_step, new_state=engine_new_state,
+                               copy_state=engine_copy_state, increment_view=engine_increment_view,
+                               increment_views=engine_increment_views)
+
 
 def profile_row(prof) -> np.ndarray | None:
     """Encode a :class:`~liegroup_int.problems.beam.model.Profile` for :func:`profile_value`.
@@ -1467,128 +1325,3 @@ def profile_row(prof) -> np.ndarray | None:
         return None
     head = [_PROFILE_KINDS[prof.kind], prof.t_on, prof.t_off, prof.ramp, len(tt)]
     return np.concatenate([np.asarray(head, dtype=float), tt, ff])
-
-
-class FusedBeamStepper:
-    """Fixed-step RKMK for one beam problem and tableau, many steps per compiled call.
-
-    What :func:`liegroup_int.integrators.drivers.integrate_fixed` uses (through
-    ``BeamProblem.compiled_stepper``) between output times when no per-step monitor is
-    given: the same stage kernels, increment combinations, end step and step checks as
-    the generic driver, fused into :func:`advance_kernel`.
-
-    Parameters
-    ----------
-    kernels : NumbaBeamKernels
-        Constant data of the problem (copied: the stage loads are written into a
-        private copy of ``sf``, so the generic wrappers' load cache stays valid).
-    tab : ButcherTableau
-        Explicit tableau (``A_f, b_f, c_f``).
-    state_cls : type
-        State class built from ``(c, v, w, R, K, K_s)`` (``BeamState``).
-    rows : list of ndarray
-        :func:`profile_row` of each time-dependent load of ``kernels._profiles``.
-    """
-
-    def __init__(self, kernels, tab, state_cls, rows):
-        self.state_cls = state_cls
-        self.stages = int(tab.stages)
-        self.sf = kernels.sf.copy()
-        self.si = kernels.si
-        self.A = np.ascontiguousarray(tab.A_f, dtype=float)
-        self.b = np.ascontiguousarray(tab.b_f, dtype=float)
-        self.c = np.ascontiguousarray(tab.c_f, dtype=float)
-        k = len(rows)
-        width = max((r.size for r in rows), default=_PR_TABLE)
-        self.lpos = np.array([a for a, _, _ in kernels._profiles], dtype=np.int64).reshape(k)
-        self.lvec = np.array([vec for _, vec, _ in kernels._profiles], dtype=float).reshape(k, 3)
-        self.lprof = np.zeros((k, width))
-        for j, r in enumerate(rows):
-            self.lprof[j, :r.size] = r
-
-    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float):
-        """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
-        ends at ``t_start + (i + 1) dt``, the last at ``t_stop``).
-
-        Parameters
-        ----------
-        t_start : float
-        y : BeamState
-            Start state (not modified).
-        t_stop : float
-            End of the last step.
-        dt : float
-            Nominal step.
-        n_steps : int
-            Number of steps, ``>= 1``.
-        max_angle : float
-            A step whose increment rotates any collocation point by more than this
-            stops the loop (:data:`ADVANCE_ANGLE`).
-
-        Returns
-        -------
-        liegroup_int.integrators.problem.Advance
-        """
-        arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
-        out = advance_kernel(*arr, self.sf, self.si, self.A, self.b, self.c, self.lpos, self.lvec,
-                             self.lprof, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
-        c, v, w, R, K, Ks, steps, status, t, t_fail, h_min, h_max, ang, quad = out
-        status = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}[status]
-        return Advance(self.state_cls(c, v, w, R, K, Ks), float(t), int(steps), float(h_min), float(h_max),
-                       status, float(t_fail), float(ang), float(quad))
-
-
-class FusedBeamAdaptive(FusedBeamStepper):
-    """Adaptive embedded RKMK for one beam problem and pair, all attempts between two
-    output times per compiled call (:func:`adaptive_kernel`).
-
-    What :func:`liegroup_int.integrators.drivers.integrate_adaptive` uses (through
-    ``BeamProblem.compiled_adaptive``) when no per-step monitor is given. Parameters as
-    :class:`FusedBeamStepper`; ``tab`` must have error weights ``e_f``.
-    """
-
-    _STATUS = {ADAPTIVE_OK: "ok", ADAPTIVE_MAX_STEPS: "max-steps", ADAPTIVE_UNDERFLOW: "underflow"}
-
-    def __init__(self, kernels, tab, state_cls, rows):
-        super().__init__(kernels, tab, state_cls, rows)
-        self.e = np.ascontiguousarray(tab.e_f, dtype=float)
-        k = min(tab.order, tab.order_hat) + 1
-        # the exponents exactly as integrate_adaptive forms them
-        self.beta1, self.beta2, self.inv_k_neg = 0.7 / k, 0.4 / k, -1.0 / k
-
-    def advance_to(self, t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
-                   safety=0.9, fac_min=0.2, fac_max=5.0):
-        """Accepted and rejected steps from ``(t, y)`` until landing on ``stop``.
-
-        Parameters
-        ----------
-        t : float
-        y : BeamState
-            Start state (not modified).
-        stop : float
-            Output time to land on.
-        h, err_prev : float
-            Controller state (step to try next, error of the last accepted step).
-        rtol, atol : float
-        h_max : float
-            Cap on the step.
-        max_steps_left : int
-            Accepted steps still allowed.
-        max_angle : float
-            Rotation guard (larger increments are rejected).
-        safety, fac_min, fac_max : float
-            Controller constants of ``integrate_adaptive``.
-
-        Returns
-        -------
-        liegroup_int.integrators.problem.AdaptiveAdvance
-        """
-        arr = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
-        out = adaptive_kernel(*arr, self.sf, self.si, self.A, self.b, self.c, self.e, self.lpos, self.lvec,
-                              self.lprof, float(t), float(stop), float(h), float(err_prev), float(rtol),
-                              float(atol), float(h_max), int(max_steps_left), float(max_angle), float(safety),
-                              float(fac_min), float(fac_max), self.beta1, self.beta2, self.inv_k_neg)
-        c, v, w, R, K, Ks, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quad = out
-        return AdaptiveAdvance(self.state_cls(c, v, w, R, K, Ks), float(t), float(h), float(err_prev), int(steps),
-                               int(rejected), int(attempts), float(h_min), float(h_max_acc), self._STATUS[status],
-                               float(quad))

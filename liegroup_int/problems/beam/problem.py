@@ -280,24 +280,16 @@ class BeamProblem(Problem):
             return self._nb.rotation_angle(u)
         return float(np.max(angle(self.N0 @ u[1])))
 
-    def compiled_stepper(self, tab):
-        """Fused fixed-step loop (backend="numba" only): every stage, combination, end
-        step and step check of many steps in one compiled call
-        (:class:`.kernels_numba.FusedBeamStepper`). ``None`` with the NumPy backend, and
-        when a load profile is not a plain :class:`Profile` (the generic path then calls
-        it in Python)."""
+    def compiled_kernels(self):
+        """The compiled engine's kernels (backend="numba" only): stage rates, action,
+        Newton-Schulz end step, rotation angle and error scale of
+        :mod:`.kernels_numba`, so that the drivers run all the steps between two output
+        times in one compiled call. ``None`` with the NumPy backend, and when a load
+        profile is not a plain :class:`Profile` (the generic path then calls it in
+        Python)."""
         if self._nb is None:
             return None
-        return self._nb.stepper(tab, BeamState)
-
-    def compiled_adaptive(self, tab):
-        """Fused adaptive loop (backend="numba" only): every attempt between two output
-        times of ``integrate_adaptive`` in one compiled call
-        (:class:`.kernels_numba.FusedBeamAdaptive`). ``None`` as for
-        :meth:`compiled_stepper`, and for tableaux without an embedded pair."""
-        if self._nb is None:
-            return None
-        return self._nb.adaptive(tab, BeamState)
+        return self._nb.compiled_problem(BeamState)
 
     # ------------------------------------------------------------------ stage kernels
     def _solve(self, rhs: np.ndarray) -> np.ndarray:

@@ -1,0 +1,448 @@
+"""The compiled RKMK engine: fixed-step and adaptive loops for every plugin (numba).
+
+A problem that wants its steps compiled hands the engine a :class:`CompiledProblem`
+(:meth:`Problem.compiled_kernels`): its state as one float64 vector (or, with
+``new_state``/``copy_state`` kernels, any fixed tuple of arrays), its increments as a flat
+float64 vector, a tuple of constant data, and a few ``numba.njit`` kernels
+(:class:`EngineKernels`)::
+
+    rate(data, t, y, u, out) -> q       out = dexpinv_u f(t, y); q: quadrature rate (or 0)
+    action(data, u, y, out)             out = Lambda(u, y)
+    angle(data, u) -> float             largest rotation angle carried by u
+    scale(data, y, out)                 increment scale at y (error norm)
+    end_step(data, y)                   optional, in place (re-orthonormalization)
+    field(data, t, y, out) -> q         optional, f(t, y) alone (FSAL pairs)
+    dexpinv(data, u, w, out)            optional, with field (FSAL pairs)
+    new_state(data, y) -> y'            optional, an uninitialized state like y
+    copy_state(data, src, dst)          optional, dst <- src
+    increment_view(data, u) -> view     optional, the kernels' shape of a flat increment
+    increment_views(data, K) -> view    optional, the same for rows K (k, m)
+
+Everything else lives here, once: the stages and their cancellation-safe combinations
+(:func:`~liegroup_int.integrators.combine_numba.combine_into`), FSAL reuse, the
+finiteness and rotation-angle checks, landing on output times, the embedded error norm
+and the :class:`~.controller.PIController` (compiled from the same functions the Python
+driver calls). The arithmetic is that of :func:`~liegroup_int.integrators.rkmk.rkmk_step`
+and of the drivers, so the compiled and generic paths agree to round-off.
+
+How the kernels get into the loops. The loop functions below are written once, as plain
+Python calling the global names ``RATE``, ``ACTION``, ... . :func:`engine_for` builds a
+copy of each with those names bound to a plugin's kernels (a new function object over the
+same code, with its own globals) and compiles it: numba inlines calls to the kernels, as
+for a closure over other ``@njit`` functions. Unlike a closure (whose captured
+dispatchers pickle differently in every process), the copies can be cached on disk:
+each is named after the plugin and a hash of the kernels' source files, so numba keeps
+one cache entry per plugin and a change to the kernels' files compiles anew.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import math
+import types
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from numba import njit
+
+from . import controller as _controller
+from .combine_numba import combine_into as _combine
+from .problem import AdaptiveAdvance, Advance
+
+ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
+ADAPTIVE_OK, ADAPTIVE_MAX_STEPS, ADAPTIVE_UNDERFLOW = 0, 1, 2
+_FIXED_STATUS = {ADVANCE_OK: "ok", ADVANCE_NON_FINITE: "non-finite", ADVANCE_ANGLE: "angle"}
+_ADAPTIVE_STATUS = {ADAPTIVE_OK: "ok", ADAPTIVE_MAX_STEPS: "max-steps", ADAPTIVE_UNDERFLOW: "underflow"}
+
+_h_accepted = njit(cache=True)(_controller.h_accepted)
+_h_rejected = njit(cache=True)(_controller.h_rejected)
+
+
+@njit(cache=True)
+def no_end_step(data, y):
+    """End step of problems without one."""
+
+
+@njit(cache=True)
+def no_field(data, t, y, out):
+    """Placeholder of problems without a separate vector field (never called)."""
+    return 0.0
+
+
+@njit(cache=True)
+def no_dexpinv(data, u, w, out):
+    """Placeholder of problems without a separate dexpinv (never called)."""
+
+
+@njit(cache=True)
+def flat_new_state(data, y):
+    """An uninitialized state like the flat vector ``y``."""
+    return np.empty_like(y)
+
+
+@njit(cache=True)
+def flat_copy_state(data, src, dst):
+    """``dst[:] = src`` for flat states."""
+    dst[:] = src
+
+
+@njit(cache=True, inline="always")
+def flat_view(data, x):
+    """Increments as the kernels see them: flat (the default)."""
+    return x
+
+
+@dataclass(frozen=True)
+class EngineKernels:
+    """The compiled kernels of one plugin (see the module docstring for their contract).
+
+    Parameters
+    ----------
+    name : str
+        Short plugin name (part of the compiled functions' names).
+    rate, action, angle, scale : numba dispatcher
+    end_step, field, dexpinv, new_state, copy_state : numba dispatcher or None
+        ``None``: no end step; no FSAL reuse; flat float64 vector states.
+    increment_view, increment_views : numba dispatcher or None
+        ``view(data, u)`` and ``views(data, K)``: the kernels' shape of a flat increment
+        ``(m,)`` and of rows of increments ``(k, m)`` (views, made once per call); ``None``:
+        flat.
+    cache : bool
+        Whether the engine's loops for these kernels are cached on disk (``False`` for
+        kernels that call a user's function).
+    """
+
+    name: str
+    rate: Callable
+    action: Callable
+    angle: Callable
+    scale: Callable
+    end_step: Callable | None = None
+    field: Callable | None = None
+    dexpinv: Callable | None = None
+    new_state: Callable | None = None
+    copy_state: Callable | None = None
+    increment_view: Callable | None = None
+    increment_views: Callable | None = None
+    cache: bool = True
+
+    @property
+    def fsal(self) -> bool:
+        """Whether FSAL pairs may reuse the last stage: a separate ``field`` and
+        ``dexpinv``, and no end step (the step then ends in the last stage's state)."""
+        return self.field is not None and self.dexpinv is not None and self.end_step is None
+
+
+@dataclass(frozen=True)
+class CompiledProblem:
+    """What a problem hands to the engine (:meth:`Problem.compiled_kernels`).
+
+    Parameters
+    ----------
+    kernels : EngineKernels
+    data : tuple
+        Constant data passed to every kernel (arrays may be work space of the kernels;
+        one ``CompiledProblem`` is not shared between threads).
+    increment_size : callable
+        ``increment_size(packed) -> int``: length of the flat increment vector for a
+        packed state (batches of points may vary in size).
+    pack : callable
+        ``pack(y)``: the engine's form of the state (C-contiguous float64 arrays: a copy
+        or a view, the engine never writes it).
+    unpack : callable
+        ``unpack(packed) -> y``: the state from the engine's form (arrays the engine
+        returns are new; they may be kept).
+    """
+
+    kernels: EngineKernels
+    data: tuple
+    increment_size: Callable[[object], int]
+    pack: Callable
+    unpack: Callable
+
+
+# ====================================================================== the loops
+# Written once; ``engine_for`` compiles a copy per plugin with RATE, ACTION, ANGLE, SCALE,
+# END_STEP, FIELD, DEXPINV, NEW_STATE and COPY_STATE bound to its kernels.
+RATE = ACTION = ANGLE = SCALE = END_STEP = FIELD = DEXPINV = NEW_STATE = COPY_STATE = INC_VIEW = INC_VIEWS = None
+
+
+def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs):
+    """One RKMK step of size ``h`` from ``(t, y0)`` (``y0`` not written): stage rates into
+    ``K``, total increment into ``u``, end state into ``y1``. ``Kv``, ``uv``, ``zv``
+    (zeros) and ``Fv`` are the kernels' views of ``K``, ``u``, zeros and ``F``.
+
+    With ``have_f0``, ``F[i0]`` is ``f(t, y0)`` and ``q0`` its quadrature rate (FSAL); with
+    ``fsal`` the last stage's vector field goes to ``F[1 - i0]`` and the step ends in the
+    last stage's state (as :func:`~liegroup_int.integrators.rkmk.rkmk_step_fsal`).
+
+    Returns ``(quadrature, evaluations, q_last)``.
+    """
+    s = b.shape[0]
+    evals = 0
+    if have_f0:
+        K[0, :] = F[i0]
+        qs[0] = q0
+    else:
+        qs[0] = RATE(data, t, y0, zv, Kv[0])
+        evals += 1
+    for r in range(1, s):
+        _combine(A[r], r, cc[r], K, h, u)
+        ACTION(data, uv, y0, ys)
+        if fsal and r == s - 1:
+            f1 = Fv[1 - i0]
+            qs[r] = FIELD(data, t + cc[r] * h, ys, f1)
+            DEXPINV(data, uv, f1, Kv[r])
+        else:
+            qs[r] = RATE(data, t + cc[r] * h, ys, uv, Kv[r])
+        evals += 1
+    if fsal:
+        COPY_STATE(data, ys, y1)
+    else:
+        _combine(b, s, 1.0, K, h, u)
+        ACTION(data, uv, y0, y1)
+        END_STEP(data, y1)
+    q = 0.0
+    for r in range(s):
+        q += b[r] * qs[r]
+    return h * q, evals, qs[s - 1]
+
+
+def _workspace(data, s, m, y):
+    """Work arrays of one call: stage rates ``K (s, m)``, increment, zeros, two vector
+    fields ``F (2, m)`` (FSAL), stage quadrature rates, and three states (a copy of ``y``,
+    the stage state, the next state)."""
+    y0 = NEW_STATE(data, y)
+    COPY_STATE(data, y, y0)
+    return (np.empty((s, m)), np.empty(m), np.zeros(m), np.empty((2, m)), np.zeros(s), y0, NEW_STATE(data, y),
+            NEW_STATE(data, y))
+
+
+def _finite(x):
+    for j in range(x.shape[0]):
+        if not math.isfinite(x[j]):
+            return False
+    return True
+
+
+def _advance_fixed(data, m, A, b, cc, fsal, y, t_start, t_stop, dt, n_steps, max_angle):
+    """Up to ``n_steps`` fixed steps from ``(t_start, y)`` on the grid of
+    :func:`~liegroup_int.integrators.drivers.integrate_fixed` (step ``i`` ends at
+    ``t_start + (i + 1) dt``, the last at ``t_stop``), stopping before the first step
+    whose increment is not finite or rotates by more than ``max_angle``.
+
+    Returns ``(y, steps, status, t, t_fail, h_min, h_max, angle, quadrature, evals)``.
+    """
+    s = b.shape[0]
+    K, u, zero, F, qs, y0, ys, y1 = _workspace(data, s, m, y)
+    Kv, uv, zv, Fv = INC_VIEWS(data, K), INC_VIEW(data, u), INC_VIEW(data, zero), INC_VIEWS(data, F)
+    have_f0, q0, i0 = False, 0.0, 0
+    t, h_min, h_max, quad, evals = t_start, np.inf, 0.0, 0.0, 0
+    for i in range(n_steps):
+        t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
+        h = t_next - t
+        q, ev, q_last = _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs)
+        evals += ev
+        if not _finite(u):
+            return y0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan, quad, evals
+        ang = ANGLE(data, uv)
+        if ang > max_angle:
+            return y0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang, quad, evals
+        y0, y1 = y1, y0
+        if fsal:
+            i0, have_f0, q0 = 1 - i0, True, q_last
+        t = t_next
+        h_min, h_max = min(h_min, h), max(h_max, h)
+        quad += q
+    return y0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad, evals
+
+
+def _error_norm(err, s0, s1, rtol, atol):
+    """RMS of ``err / (atol + rtol max(s0, s1))`` (NaN in a scale propagates, as
+    ``np.maximum``): :func:`~liegroup_int.integrators.rkmk.error_norm`."""
+    acc = 0.0
+    for j in range(err.shape[0]):
+        a, c = s0[j], s1[j]
+        sc = a if (a >= c or a != a) else c
+        wv = err[j] / (atol + rtol * sc)
+        acc += wv * wv
+    return math.sqrt(acc / err.shape[0])
+
+
+def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rtol, atol, h_max,
+                      max_steps_left, max_angle, g):
+    """Accepted and rejected embedded steps from ``(t, y)`` until landing on ``stop``: the
+    loop body of :func:`~liegroup_int.integrators.drivers.integrate_adaptive` for one
+    output time, controller gains ``g`` (:meth:`PIController.gains`).
+
+    Returns ``(y, t, h, err_prev, steps, rejected, attempts, h_min, h_max, status,
+    quadrature, evals)``.
+    """
+    s = b.shape[0]
+    K, u, zero, F, qs, y0, ys, y1 = _workspace(data, s, m, y)
+    Kv, uv, zv, Fv = INC_VIEWS(data, K), INC_VIEW(data, u), INC_VIEW(data, zero), INC_VIEWS(data, F)
+    err_v = np.empty(m)
+    sc0 = np.empty(m)
+    sc1 = np.empty(m)
+    have_f0, q0, i0 = False, 0.0, 0
+    steps, rejected, attempts, evals, quad = 0, 0, 0, 0, 0.0
+    h_min_acc, h_max_acc = np.inf, 0.0
+    land_tol = 1e-12 * max(1.0, abs(stop))
+    SCALE(data, y0, sc0)
+    while True:
+        if steps >= max_steps_left:
+            return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS, quad,
+                    evals)
+        land = t + h >= stop - land_tol
+        h_try = stop - t if land else h
+        q, ev, q_last = _step(data, A, b, cc, fsal, y0, t, h_try, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0,
+                              qs)
+        evals += ev
+        attempts += 1
+        _combine(e, s, 0.0, K, h_try, err_v)
+        SCALE(data, y1, sc1)
+        err = _error_norm(err_v, sc0, sc1, rtol, atol)
+        ang = ANGLE(data, uv)
+        if not math.isfinite(err):
+            err = np.inf
+        if err <= 1.0 and ang <= max_angle:
+            t = stop if land else t + h_try
+            y0, y1 = y1, y0
+            sc0, sc1 = sc1, sc0
+            if fsal:
+                i0, have_f0, q0 = 1 - i0, True, q_last
+            steps += 1
+            quad += q
+            h_min_acc = h_try if h_try < h_min_acc else h_min_acc
+            h_max_acc = h_try if h_try > h_max_acc else h_max_acc
+            h, err_prev = _h_accepted(err, err_prev, h_try, h_max, g)
+            if land:
+                return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_OK, quad,
+                        evals)
+        else:
+            rejected += 1
+            if fsal and not have_f0:  # K[0] = f(t, y0): the retry starts from it
+                F[i0, :] = K[0]
+                have_f0, q0 = True, qs[0]
+            h = _h_rejected(err, ang, h_try, max_angle, g)
+            if h < 1e-14 * max(1.0, abs(t)):
+                return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW,
+                        quad, evals)
+
+
+# ====================================================================== specialization
+_TEMPLATES = (("_step", _step), ("_advance_fixed", _advance_fixed), ("_advance_adaptive", _advance_adaptive))
+_HELPERS = (("_finite", _finite), ("_error_norm", _error_norm), ("_workspace", _workspace))
+
+
+@dataclass(frozen=True)
+class Engine:
+    """The compiled loops of one set of kernels (:func:`engine_for`)."""
+
+    kernels: EngineKernels
+    advance_fixed: Callable
+    advance_adaptive: Callable
+
+
+_ENGINES: dict[EngineKernels, Engine] = {}
+
+
+def _source_hash(kernels: EngineKernels) -> str:
+    """Hash of the source files of the kernels (numba's cache watches only this file)."""
+    files = set()
+    for k in (kernels.rate, kernels.action, kernels.angle, kernels.scale, kernels.end_step, kernels.field,
+              kernels.dexpinv, kernels.new_state, kernels.copy_state, kernels.increment_view,
+              kernels.increment_views):
+        if k is not None:
+            files.add(inspect.getfile(getattr(k, "py_func", k)))
+    h = hashlib.sha1()
+    for path in sorted(files):
+        with open(path, "rb") as fh:
+            h.update(fh.read())
+    return h.hexdigest()[:12]
+
+
+def engine_for(kernels: EngineKernels) -> Engine:
+    """The engine's loops compiled with ``kernels`` (built once per process per kernels)."""
+    eng = _ENGINES.get(kernels)
+    if eng is not None:
+        return eng
+    ns = dict(globals())
+    ns.update(RATE=kernels.rate, ACTION=kernels.action, ANGLE=kernels.angle, SCALE=kernels.scale,
+              END_STEP=kernels.end_step or no_end_step, FIELD=kernels.field or no_field,
+              DEXPINV=kernels.dexpinv or no_dexpinv, NEW_STATE=kernels.new_state or flat_new_state,
+              COPY_STATE=kernels.copy_state or flat_copy_state, INC_VIEW=kernels.increment_view or flat_view,
+              INC_VIEWS=kernels.increment_views or flat_view)
+    tag = f"{kernels.name}_{_source_hash(kernels)}" if kernels.cache else kernels.name
+    for name, fn in _HELPERS + _TEMPLATES:
+        copy = types.FunctionType(fn.__code__, ns, name, fn.__defaults__)
+        copy.__qualname__ = f"{tag}.{name}"
+        copy.__doc__ = fn.__doc__
+        ns[name] = njit(cache=kernels.cache)(copy)
+    eng = Engine(kernels, ns["_advance_fixed"], ns["_advance_adaptive"])
+    _ENGINES[kernels] = eng
+    return eng
+
+
+# ====================================================================== Python side
+class CompiledStepper:
+    """Fixed-step and adaptive loops of one problem and tableau through the engine:
+    the objects :func:`~liegroup_int.integrators.drivers.integrate_fixed` and
+    :func:`~liegroup_int.integrators.drivers.integrate_adaptive` hand all steps between
+    two output times.
+
+    Parameters
+    ----------
+    cp : CompiledProblem
+    tab : ButcherTableau
+        Explicit tableau; :meth:`advance_to` needs an embedded pair.
+    """
+
+    def __init__(self, cp: CompiledProblem, tab):
+        self.cp = cp
+        self.engine = engine_for(cp.kernels)
+        self.stages = int(tab.stages)
+        self.tab = tab
+        self.fsal = bool(tab.fsal and cp.kernels.fsal)
+        self.A = np.ascontiguousarray(tab.A_f, dtype=float)
+        self.b = np.ascontiguousarray(tab.b_f, dtype=float)
+        self.c = np.ascontiguousarray(tab.c_f, dtype=float)
+        self.e = None if tab.e_f is None else np.ascontiguousarray(tab.e_f, dtype=float)
+
+    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float) -> Advance:
+        """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
+        ends at ``t_start + (i + 1) dt``, the last one at ``t_stop``); ``y`` is not
+        modified. See :class:`~liegroup_int.integrators.problem.Advance`."""
+        cp, flat = self.cp, self.cp.pack(y)
+        out = self.engine.advance_fixed(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal,
+                                        flat, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
+        yf, steps, status, t, t_fail, h_min, h_max, ang, quad, evals = out
+        return Advance(cp.unpack(yf), float(t), int(steps), float(h_min), float(h_max), _FIXED_STATUS[status],
+                       float(t_fail), float(ang), float(quad), int(evals))
+
+    def advance_to(self, t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
+                   gains) -> AdaptiveAdvance:
+        """Accepted and rejected steps from ``(t, y)`` until landing on ``stop`` (``y`` not
+        modified); ``gains`` from :meth:`~.controller.PIController.gains`. See
+        :class:`~liegroup_int.integrators.problem.AdaptiveAdvance`."""
+        if self.e is None:
+            raise ValueError(f"method {self.tab.name!r} has no embedded pair")
+        cp, flat = self.cp, self.cp.pack(y)
+        out = self.engine.advance_adaptive(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.e,
+                                           self.fsal, flat, float(t), float(stop), float(h), float(err_prev),
+                                           float(rtol), float(atol), float(h_max), int(max_steps_left),
+                                           float(max_angle), np.asarray(gains, dtype=float))
+        yf, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out
+        return AdaptiveAdvance(cp.unpack(yf), float(t), float(h), float(err_prev), int(steps), int(rejected),
+                               int(attempts), float(h_min), float(h_max_acc), _ADAPTIVE_STATUS[status], float(quad),
+                               int(evals))
+
+
+def compiled_stepper(problem, tab) -> CompiledStepper | None:
+    """The engine's loops for ``problem`` and ``tab``, or ``None`` when the problem has no
+    compiled kernels (:meth:`Problem.compiled_kernels`; duck-typed problems have none)."""
+    hook = getattr(problem, "compiled_kernels", None)
+    cp = hook() if hook is not None else None
+    return CompiledStepper(cp, tab) if cp is not None else None
