@@ -5,7 +5,7 @@ Files in the output directory:
 * ``history.csv`` (streamed rows), ``results.h5`` (history and state snapshots, streamed),
 * ``checkpoint.npz`` (state at the last checkpointed output time),
 * ``summary.json`` (written at the end, also for failed or interrupted runs),
-* ``history.png`` and, for beams, ``shapes.png`` / ``shapes.npz``.
+* ``history.png`` and, for problems that record shapes, ``shapes.png`` / ``shapes.npz``.
 
 Checkpoints are taken at output times, every ``output.checkpoint_every`` wall seconds, at
 the end, and when SIGINT/SIGTERM arrives (the run then stops at its next output time).
@@ -261,12 +261,10 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     shapes = None
     if sim.snapshot is not None:
         observers.append(sim.snapshot)
-    from .problems.beam import BeamProblem
+    if scene.output.paraview and sim.frames is not None:
+        from .io.paraview import FrameSeriesWriter
 
-    if scene.output.paraview and isinstance(sim.problem, BeamProblem):
-        from .io.paraview import BeamParaViewWriter
-
-        pv = BeamParaViewWriter(out_dir, sim.problem)
+        pv = FrameSeriesWriter(out_dir, sim.frames, stem=scene.kind)
         if resume is not None:
             pv.resume_after(t0 + 1e-9 * every)
         observers.append(pv)

@@ -229,12 +229,72 @@ def interpolate_frames(u_c: np.ndarray, R_c: np.ndarray, u: np.ndarray) -> np.nd
     return exp_so3(tau[:, None] * rel) @ R_c[i]
 
 
-class BeamParaViewWriter:
-    """Observer ``(t, y)`` writing a beam's centreline and section frames for ParaView.
+class FrameSeriesWriter:
+    """Observer ``(t, y)`` writing a curve with frames as a ParaView time series.
 
-    Each call writes ``out_dir/paraview/beam_{k:05d}.vtu`` and then rewrites
-    ``out_dir/beam.pvd`` listing every file written so far, so the index is valid at any
-    time (a killed run keeps the steps it reached).
+    Each call writes ``out_dir/paraview/{stem}_{k:05d}.vtu`` (:func:`write_beam_vtu`) and
+    then rewrites ``out_dir/{stem}.pvd`` listing every file written so far, so the index is
+    valid at any time (a killed run keeps the steps it reached). It knows no model: the
+    arrays come from ``geometry``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Run directory; ``paraview/`` is created in it.
+    geometry : callable
+        ``geometry(y) -> (points (m, 3), frames (m, 3, 3), point_data dict of (m,) arrays)``.
+    every_output : bool
+        ``True``: one file per call (a time series). ``False``: every call overwrites
+        ``{stem}_00000.vtu`` and the index lists only the latest time (last state only).
+    encoding : {"ascii", "base64"}
+        Passed to :func:`write_beam_vtu`.
+    stem : str
+        File name stem.
+
+    Attributes
+    ----------
+    entries : list of (float, str)
+        ``(t, "paraview/{stem}_XXXXX.vtu")`` of the files in the index.
+    pvd : Path
+        The index file, ``out_dir/{stem}.pvd``.
+    """
+
+    def __init__(self, out_dir, geometry, every_output: bool = True, encoding: str = "ascii", stem: str = "beam"):
+        if encoding not in ENCODINGS:
+            raise ValueError(f"encoding: expected one of {ENCODINGS}, got {encoding!r}")
+        self.out_dir = Path(out_dir)
+        self.dir = self.out_dir / "paraview"
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self.stem = stem
+        self.pvd = self.out_dir / f"{stem}.pvd"
+        self.frames_of, self.every_output, self.encoding = geometry, every_output, encoding
+        self.entries: list[tuple[float, str]] = []
+
+    def resume_after(self, t: float) -> None:
+        """Continue the series of an existing index from the entries up to ``t``."""
+        import xml.etree.ElementTree as ET
+
+        if not self.pvd.exists():
+            return
+        root = ET.parse(self.pvd).getroot()
+        self.entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")
+                        if float(d.get("timestep")) <= t]
+
+    def __call__(self, t: float, y) -> None:
+        k = len(self.entries) if self.every_output else 0
+        name = f"{self.stem}_{k:05d}.vtu"
+        points, frames, data = self.frames_of(y)
+        write_beam_vtu(self.dir / name, points, frames, data, self.encoding)
+        entry = (float(t), f"{self.dir.name}/{name}")
+        if self.every_output:
+            self.entries.append(entry)
+        else:
+            self.entries = [entry]
+        write_pvd(self.pvd, self.entries)
+
+
+class BeamParaViewWriter(FrameSeriesWriter):
+    """:class:`FrameSeriesWriter` of a beam's centreline and section frames.
 
     Parameters
     ----------
@@ -244,8 +304,7 @@ class BeamParaViewWriter:
         Supplies the basis (``space.N0``, ``space.point_matrix``), the collocation
         parameters ``space.u_c`` and the reference arc length ``space.s_c``.
     every_output : bool
-        ``True``: one file per call (a time series). ``False``: every call overwrites
-        ``beam_00000.vtu`` and the index lists only the latest time (last state only).
+        As :class:`FrameSeriesWriter`.
     n_points : int, optional
         ``None`` (default): points at the ``n_ctrl`` collocation points,
         ``N0 @ y.c``, with the exact frames ``y.R`` there. An integer ``>= 2``:
@@ -253,13 +312,6 @@ class BeamParaViewWriter:
         frames interpolated along geodesics between the collocation frames.
     encoding : {"ascii", "base64"}
         Passed to :func:`write_beam_vtu`.
-
-    Attributes
-    ----------
-    entries : list of (float, str)
-        ``(t, "paraview/beam_XXXXX.vtu")`` of the files in the index.
-    pvd : Path
-        The index file, ``out_dir/beam.pvd``.
 
     Notes
     -----
@@ -270,14 +322,8 @@ class BeamParaViewWriter:
                  encoding: str = "ascii"):
         if n_points is not None and (int(n_points) != n_points or n_points < 2):
             raise ValueError(f"n_points: expected None or an integer >= 2, got {n_points!r}")
-        if encoding not in ENCODINGS:
-            raise ValueError(f"encoding: expected one of {ENCODINGS}, got {encoding!r}")
-        self.out_dir = Path(out_dir)
-        self.dir = self.out_dir / "paraview"
-        self.dir.mkdir(parents=True, exist_ok=True)
-        self.pvd = self.out_dir / "beam.pvd"
-        self.problem, self.every_output, self.encoding = problem, every_output, encoding
-        self.entries: list[tuple[float, str]] = []
+        super().__init__(out_dir, self._arrays, every_output, encoding, "beam")
+        self.problem = problem
         space = problem.space
         self._u_c = np.asarray(space.u_c, dtype=float)
         if n_points is None:
@@ -292,24 +338,6 @@ class BeamParaViewWriter:
         frames = y.R if self._u is None else interpolate_frames(self._u_c, np.asarray(y.R), self._u)
         return points, frames
 
-    def resume_after(self, t: float) -> None:
-        """Continue the series of an existing ``beam.pvd`` from the entries up to ``t``."""
-        import xml.etree.ElementTree as ET
-
-        if not self.pvd.exists():
-            return
-        root = ET.parse(self.pvd).getroot()
-        self.entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")
-                        if float(d.get("timestep")) <= t]
-
-    def __call__(self, t: float, y) -> None:
-        k = len(self.entries) if self.every_output else 0
-        name = f"beam_{k:05d}.vtu"
+    def _arrays(self, y):
         points, frames = self.geometry(y)
-        write_beam_vtu(self.dir / name, points, frames, {"s": self._s}, self.encoding)
-        entry = (float(t), f"{self.dir.name}/{name}")
-        if self.every_output:
-            self.entries.append(entry)
-        else:
-            self.entries = [entry]
-        write_pvd(self.pvd, self.entries)
+        return points, frames, {"s": self._s}

@@ -24,6 +24,7 @@ import numpy as np
 from ..groups import SO3, Product, Rn
 from ..groups.so3 import cross
 from ..integrators import GroupProblem
+from .errors import ParameterError
 
 SPACE = Product(SO3, Rn(3))
 E3 = np.array([0.0, 0.0, 1.0])
@@ -55,14 +56,14 @@ class RigidBody:
     def __post_init__(self):
         I = np.asarray(self.inertia, dtype=float)
         if I.shape != (3,) or not np.all(I > 0):
-            raise ValueError(f"inertia: expected three positive principal moments, got {self.inertia!r}")
+            raise ParameterError("inertia", f"expected three positive principal moments, got {self.inertia!r}")
         a, b, c = I
         if a > b + c or b > a + c or c > a + b:
-            raise ValueError(f"inertia: {self.inertia!r} violates the triangle inequality of a rigid body")
+            raise ParameterError("inertia", f"{self.inertia!r} violates the triangle inequality of a rigid body")
         if not self.mass >= 0:
-            raise ValueError(f"mass: expected >= 0, got {self.mass!r}")
+            raise ParameterError("mass", f"expected >= 0, got {self.mass!r}")
         if np.asarray(self.com, dtype=float).shape != (3,):
-            raise ValueError(f"com: expected 3 numbers, got {self.com!r}")
+            raise ParameterError("com", f"expected 3 numbers, got {self.com!r}")
 
     # -- state helpers
     def state(self, R: np.ndarray, W: np.ndarray) -> np.ndarray:

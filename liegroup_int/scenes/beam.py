@@ -18,6 +18,7 @@ from ..problems.beam import (
     SectionConstants,
 )
 from ..problems.beam.damping import size_kelvin_voigt
+from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
 from .schema import Key, SceneError, non_negative, positive
 
@@ -179,19 +180,17 @@ def constants(scene: Scene) -> SectionConstants:
         else:
             section = Section.rectangle(_need(scene, "section.b", "rectangle"), _need(scene, "section.h", "rectangle"), k)
         return SectionConstants.from_material(material, section)
-    except ValueError as exc:
-        name, _, msg = str(exc).partition(":")
-        prefix = "material" if name in ("E", "rho", "nu", "G") else "section"
-        raise SceneError(f"{scene.source}: key '{prefix}.{name}': {msg.strip()}") from None
+    except ParameterError as exc:
+        prefix = "material" if exc.field in ("E", "rho", "nu", "G") else "section"
+        raise SceneError(f"{scene.source}: key '{prefix}.{exc.field}': {exc.reason}") from None
 
 
 def _profile(scene: Scene, pre: str) -> Profile:
     try:
         return Profile(kind=scene[f"{pre}.profile"], t_on=scene[f"{pre}.t_on"], t_off=scene[f"{pre}.t_off"],
                        ramp=scene[f"{pre}.ramp"], table=scene[f"{pre}.table"])
-    except ValueError as exc:
-        name, _, msg = str(exc).partition(":")
-        raise SceneError(f"{scene.source}: key '{pre}.{name}': {msg.strip()}") from None
+    except ParameterError as exc:
+        raise SceneError(f"{scene.source}: key '{pre}.{exc.field}': {exc.reason}") from None
 
 
 def _end_load(scene: Scene, end: str) -> EndLoad:
@@ -209,6 +208,20 @@ def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:
     report kept as ``damping_report``; without it the problem is built undamped, at no
     cost (scene checks, tests).
     """
+    pb = _checked[1] if _checked[0] is scene else _undamped(scene)
+    kv = scene["material.kelvin_voigt"]
+    if kv == "auto" and size_damping:
+        pb = _sized(scene, pb)
+    return pb
+
+
+#: The problem built by the last :func:`check` and its scene: a run validates the scene
+#: (check) and then builds it; the second build reuses the first.
+_checked: tuple = (None, None)
+
+
+def _undamped(scene: Scene) -> BeamProblem:
+    """The problem with ``kelvin_voigt = "auto"`` taken as 0 (sized by :func:`_sized`)."""
     curve = geometry(scene)
     a = scene["geometry.reference_vector"]
     try:
@@ -227,30 +240,37 @@ def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:
                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
-    if kv == "auto" and size_damping:
-        try:
-            y0 = pb.initial_state()
-        except ValueError as exc:
-            raise SceneError(f"{scene.source}: {exc}") from None
-        try:
-            rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
-        except ValueError as exc:
-            raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
-                             f"({pb.formulation} collocation, p={scene['space.degree']}, "
-                             f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
-                             + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
-                                else "") + ", or give an explicit retardation time") from None
-        pb = pb.with_kelvin_voigt(rep.tau)
-        pb.damping_report = rep
+    return pb
+
+
+def _sized(scene: Scene, pb: BeamProblem) -> BeamProblem:
+    """``pb`` with the retardation time of ``kelvin_voigt = "auto"`` sized at the initial
+    state (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`)."""
+    try:
+        y0 = pb.initial_state()
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
+    try:
+        rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
+                         f"({pb.formulation} collocation, p={scene['space.degree']}, "
+                         f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
+                         + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
+                            else "") + ", or give an explicit retardation time") from None
+    pb = pb.with_kelvin_voigt(rep.tau)
+    pb.damping_report = rep
     return pb
 
 
 def check(scene: Scene) -> None:
-    pb = problem(scene, size_damping=False)
+    global _checked
+    pb = _undamped(scene)
     try:
         pb.initial_state()
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
+    _checked = (scene, pb)
 
 
 def diagnostics(pb: BeamProblem, names) -> dict:
@@ -318,8 +338,16 @@ def build(scene: Scene) -> Simulation:
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
                      final_state=final_state, info=info, snapshot=ShapeRecorder(),
                      to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a),
-                     conserved=pb.mechanical_energy, stability=stability(scene, pb))
+                     conserved=pb.mechanical_energy, stability=stability(scene, pb),
+                     frames=_frames(pb))
     return sim
+
+
+def _frames(pb: BeamProblem):
+    """Centreline at the collocation points, their section frames and arc lengths
+    (``Simulation.frames``, the ParaView series)."""
+    N0, s_c = np.asarray(pb.space.N0), np.asarray(pb.space.s_c, dtype=float)
+    return lambda y: (N0 @ y.c, y.R, {"s": s_c})
 
 
 #: Largest number of unknowns (12 n_ctrl) for which the guards compute the dense spectrum

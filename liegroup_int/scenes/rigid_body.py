@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..groups import SO3
+from ..problems.errors import ParameterError
 from ..problems.rigid_body import RigidBody
 from .scene import ProblemKind, Scene, Simulation, register_kind
 from .schema import Key, SceneError, non_negative
@@ -27,8 +28,8 @@ def _body(scene: Scene) -> RigidBody:
     try:
         return RigidBody(inertia=scene["body.inertia"], mass=scene["body.mass"], com=scene["body.com"],
                          gravity=scene["body.gravity"])
-    except ValueError as exc:
-        raise SceneError(f"{scene.source}: key 'body.{str(exc).split(':')[0]}': {str(exc).split(':', 1)[1].strip()}") from None
+    except ParameterError as exc:
+        raise SceneError(f"{scene.source}: key 'body.{exc.field}': {exc.reason}") from None
 
 
 def check(scene: Scene) -> None:

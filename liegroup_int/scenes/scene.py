@@ -138,6 +138,10 @@ class Simulation:
         energy, whose change is the work of the loads): the energy balance.
     stability : Stability, optional
         Hooks of the run guards (stable step, spectrum probe, failure diagnosis).
+    frames : callable, optional
+        ``frames(y) -> (points (m, 3), frames (m, 3, 3), point_data)``: a curve with
+        section frames, written as a ParaView series when the scene asks for it
+        (``output.paraview``); ``None``: the problem has no such picture.
     """
 
     problem: Any
@@ -150,6 +154,7 @@ class Simulation:
     from_arrays: Callable[[dict], Any] = lambda a: a["y"]
     conserved: Callable[[Any], float] | None = None
     stability: Stability | None = None
+    frames: Callable[[Any], tuple] | None = None
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,8 @@ from math import pi
 
 import numpy as np
 
+from ..errors import ParameterError
+
 END_TYPES = ("clamped", "hinged", "free")
 
 
@@ -40,13 +42,13 @@ class Material:
 
     def __post_init__(self):
         if not self.E > 0:
-            raise ValueError(f"E: expected a positive Young's modulus, got {self.E!r}")
+            raise ParameterError("E", f"expected a positive Young's modulus, got {self.E!r}")
         if not self.rho > 0:
-            raise ValueError(f"rho: expected a positive density, got {self.rho!r}")
+            raise ParameterError("rho", f"expected a positive density, got {self.rho!r}")
         if self.G is None and not (-1.0 < self.nu <= 0.5):
-            raise ValueError(f"nu: expected -1 < nu <= 0.5, got {self.nu!r}")
+            raise ParameterError("nu", f"expected -1 < nu <= 0.5, got {self.nu!r}")
         if self.G is not None and not self.G > 0:
-            raise ValueError(f"G: expected a positive shear modulus, got {self.G!r}")
+            raise ParameterError("G", f"expected a positive shear modulus, got {self.G!r}")
 
     @property
     def shear_modulus(self) -> float:
@@ -78,20 +80,20 @@ class Section:
     def __post_init__(self):
         for name in ("A", "I1", "I2", "J", "shear_factor"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"{name}: expected a positive section constant, got {getattr(self, name)!r}")
+                raise ParameterError(name, f"expected a positive section constant, got {getattr(self, name)!r}")
 
     @staticmethod
     def circle(d: float, shear_factor: float = 1.0) -> "Section":
         """Solid circle of diameter ``d``: ``A = pi d^2/4``, ``I = pi d^4/64``, ``J = pi d^4/32``."""
         if not d > 0:
-            raise ValueError(f"d: expected a positive diameter, got {d!r}")
+            raise ParameterError("d", f"expected a positive diameter, got {d!r}")
         return Section(pi * d**2 / 4, pi * d**4 / 64, pi * d**4 / 64, pi * d**4 / 32, shear_factor)
 
     @staticmethod
     def square(t: float, shear_factor: float = 1.0) -> "Section":
         """Solid square of side ``t``: ``I = t^4/12``, torsion constant ``0.1406 t^4``."""
         if not t > 0:
-            raise ValueError(f"t: expected a positive side, got {t!r}")
+            raise ParameterError("t", f"expected a positive side, got {t!r}")
         return Section(t**2, t**4 / 12, t**4 / 12, 0.1406 * t**4, shear_factor)
 
     @staticmethod
@@ -103,7 +105,7 @@ class Section:
         with ``a = max(b, h)``, ``c = min(b, h)``.
         """
         if not (b > 0 and h > 0):
-            raise ValueError(f"b, h: expected positive sides, got {b!r}, {h!r}")
+            raise ParameterError("b, h", f"expected positive sides, got {b!r}, {h!r}")
         a, c = max(b, h), min(b, h)
         J = a * c**3 * (1.0 / 3.0 - 0.21 * (c / a) * (1.0 - (c / a) ** 4 / 12.0))
         return Section(b * h, b * h**3 / 12, h * b**3 / 12, J, shear_factor)
@@ -134,9 +136,9 @@ class SectionConstants:
         for name in ("CN", "CM", "Jm"):
             v = getattr(self, name)
             if len(v) != 3 or not all(x > 0 for x in v):
-                raise ValueError(f"{name}: expected three positive constants, got {v!r}")
+                raise ParameterError(name, f"expected three positive constants, got {v!r}")
         if not self.mu > 0:
-            raise ValueError(f"mu: expected a positive mass per length, got {self.mu!r}")
+            raise ParameterError("mu", f"expected a positive mass per length, got {self.mu!r}")
 
     @staticmethod
     def from_material(material: "Material", section: "Section") -> "SectionConstants":
@@ -174,13 +176,13 @@ class Profile:
 
     def __post_init__(self):
         if self.kind not in ("constant", "step", "ramp", "smooth", "table"):
-            raise ValueError(f"profile: expected constant, step, ramp, smooth or table, got {self.kind!r}")
+            raise ParameterError("profile", f"expected constant, step, ramp, smooth or table, got {self.kind!r}")
         if self.kind in ("ramp", "smooth") and not self.ramp > 0:
-            raise ValueError(f"ramp: expected a positive ramp duration, got {self.ramp!r}")
+            raise ParameterError("ramp", f"expected a positive ramp duration, got {self.ramp!r}")
         if self.kind == "table" and len(self.table) < 2:
-            raise ValueError("table: expected at least two (t, factor) points")
+            raise ParameterError("table", "expected at least two (t, factor) points")
         if not self.t_off > self.t_on:
-            raise ValueError(f"t_off: expected t_off > t_on, got t_on={self.t_on!r}, t_off={self.t_off!r}")
+            raise ParameterError("t_off", f"expected t_off > t_on, got t_on={self.t_on!r}, t_off={self.t_off!r}")
 
     def __call__(self, t: float) -> float:
         if self.kind == "constant":
@@ -251,7 +253,7 @@ class BoundaryConditions:
     def __post_init__(self):
         for name in ("start", "end"):
             if getattr(self, name) not in END_TYPES:
-                raise ValueError(f"{name}: expected one of {', '.join(END_TYPES)}, got {getattr(self, name)!r}")
+                raise ParameterError(name, f"expected one of {', '.join(END_TYPES)}, got {getattr(self, name)!r}")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,45 @@
+"""Scenes build their problem once, and read model errors as data."""
+
+import pytest
+
+import liegroup_int.scenes.beam as beam_kind
+from liegroup_int.problems import ParameterError, RigidBody
+from liegroup_int.problems.beam.model import Material, Profile
+from liegroup_int.scenes import SceneError, load_scene
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda: Material(E=-1.0, rho=1.0), "E"),
+    (lambda: Profile("ramp", ramp=0.0), "ramp"),
+    (lambda: RigidBody(inertia=(1.0, 1.0, 5.0)), "inertia"),
+    (lambda: RigidBody(mass=-1.0), "mass"),
+])
+def test_model_errors_name_their_field(make, field):
+    with pytest.raises(ParameterError) as info:
+        make()
+    assert info.value.field == field and str(info.value) == f"{field}: {info.value.reason}"
+    assert isinstance(info.value, ValueError)  # callers catching ValueError keep working
+
+
+@pytest.mark.parametrize("scene, override, key", [
+    ("cantilever", {"material.rho": -2.0}, "material.rho"),
+    ("cantilever", {"loads.end.profile": "ramp", "loads.end.ramp": 0.0}, "loads.end.ramp"),
+    ("heavy_top", {"body.inertia": [1.0, 1.0, 5.0]}, "body.inertia"),
+])
+def test_scene_errors_name_the_key(scene, override, key):
+    with pytest.raises(SceneError, match=f"key '{key}'"):
+        load_scene(scene, overrides=override)
+
+
+def test_a_run_builds_the_beam_once(monkeypatch):
+    calls = []
+    original = beam_kind._undamped
+
+    def counted(scene):
+        calls.append(scene)
+        return original(scene)
+
+    monkeypatch.setattr(beam_kind, "_undamped", counted)
+    scene = load_scene("cantilever")  # validation builds it
+    sim = beam_kind.build(scene)  # the run reuses it (and sizes its damping)
+    assert len(calls) == 1 and sim.problem.damping_report is not None
