@@ -25,8 +25,9 @@ class LieGroup(ABC):
     """A matrix or vector Lie group acting on itself from the left.
 
     Subclasses implement the *minimum API* (``identity``, ``compose``, ``inverse``,
-    ``exp``, ``log``, ``ad``, ``Ad``, ``act``) and may override ``dexp``/``dexpinv``
-    with closed forms; everything else is derived here once.
+    ``exp``, ``log``, ``hat``, ``vee``, ``ad``, ``Ad``, ``act``) and may override
+    ``dexp``/``dexpinv`` with closed forms and ``normalize`` where points satisfy
+    constraints; everything else is derived here once.
 
     Attributes
     ----------
@@ -34,10 +35,13 @@ class LieGroup(ABC):
         Dimension of the Lie algebra (length of the last axis of algebra elements).
     point_shape : tuple of int
         Trailing shape of one group element.
+    act_shape : tuple of int
+        Trailing shape of the points :meth:`act` transforms.
     """
 
     dim: int
     point_shape: tuple[int, ...]
+    act_shape: tuple[int, ...]
     name: str
 
     # ------------------------------------------------------------------ minimum API
@@ -62,6 +66,15 @@ class LieGroup(ABC):
         """Logarithm (principal branch), ``(..., *point_shape) -> (..., dim)``."""
 
     @abstractmethod
+    def hat(self, xi: np.ndarray) -> np.ndarray:
+        """The algebra element as a matrix of the group's matrix representation,
+        ``(..., dim) -> (..., m, m)``, so that ``hat([xi, eta]) = [hat(xi), hat(eta)]``."""
+
+    @abstractmethod
+    def vee(self, m: np.ndarray) -> np.ndarray:
+        """Inverse of :meth:`hat`, ``(..., m, m) -> (..., dim)``."""
+
+    @abstractmethod
     def ad(self, xi: np.ndarray) -> np.ndarray:
         """Matrix of ``ad_xi = [xi, .]``, shape ``(..., dim, dim)``."""
 
@@ -71,7 +84,8 @@ class LieGroup(ABC):
 
     @abstractmethod
     def act(self, g: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """Action of ``g`` on a point ``p`` of the space the group transforms."""
+        """Action of ``g`` on a point ``p`` of the space the group transforms,
+        ``(..., *act_shape) -> (..., *act_shape)``."""
 
     # ------------------------------------------------------------------ derived API
     def bracket(self, xi: np.ndarray, eta: np.ndarray) -> np.ndarray:
@@ -134,6 +148,21 @@ class LieGroup(ABC):
         """
         batch = np.shape(g)[: np.ndim(g) - len(self.point_shape)]
         return np.ones(batch + (self.dim,))
+
+    def normalize(self, g: np.ndarray) -> np.ndarray:
+        """A point pulled back onto the group after round-off drift, same shape as ``g``.
+
+        Default: a copy (points without constraints). Rotations take one Newton-Schulz
+        step ``R (3 I - R^T R) / 2`` toward the nearest rotation: for a drift ``e`` in
+        ``R^T R = I + e`` the result has ``O(e^2)`` drift (quadratic), so one step per
+        integration step keeps rotations orthogonal to round-off for ever.
+        """
+        return np.array(g, dtype=float, copy=True)
+
+    def sample(self, rng: np.random.Generator, batch_shape: tuple[int, ...] = (), scale: float = 1.0) -> np.ndarray:
+        """Random points ``exp(scale * xi)`` with standard normal ``xi``, shape
+        ``batch_shape + point_shape`` (for tests and examples)."""
+        return self.exp(scale * rng.standard_normal(tuple(batch_shape) + (self.dim,)))
 
     def rotation_angle(self, xi: np.ndarray) -> np.ndarray:
         """Largest rotation angle contained in the algebra element ``xi``, shape ``(...)``.

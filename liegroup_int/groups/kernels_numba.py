@@ -153,6 +153,29 @@ def _q_times(cC, cE, cF, r0, r1, r2, t0, t1, t2, w0, w1, w2):
 
 
 # ====================================================================== kernels
+@njit(cache=True, fastmath=False)
+def normalize_rotations(R):
+    """``R <- (R / 2) (3 I - R^T R)`` for each ``R[i]`` of ``(n, 3, 3)``, in place: the
+    compiled twin of :meth:`SO3.normalize <liegroup_int.groups.so3.SO3.normalize>` (one
+    Newton-Schulz step, the beam's end step)."""
+    for i in range(R.shape[0]):
+        r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
+        r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
+        r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
+        # A = 3 I - R^T R (symmetric)
+        a00 = 3.0 - (r00 * r00 + r10 * r10 + r20 * r20)
+        a11 = 3.0 - (r01 * r01 + r11 * r11 + r21 * r21)
+        a22 = 3.0 - (r02 * r02 + r12 * r12 + r22 * r22)
+        a01 = 0.0 - (r00 * r01 + r10 * r11 + r20 * r21)
+        a02 = 0.0 - (r00 * r02 + r10 * r12 + r20 * r22)
+        a12 = 0.0 - (r01 * r02 + r11 * r12 + r21 * r22)
+        for a in range(3):
+            h0, h1, h2 = 0.5 * R[i, a, 0], 0.5 * R[i, a, 1], 0.5 * R[i, a, 2]
+            R[i, a, 0] = h0 * a00 + h1 * a01 + h2 * a02
+            R[i, a, 1] = h0 * a01 + h1 * a11 + h2 * a12
+            R[i, a, 2] = h0 * a02 + h1 * a12 + h2 * a22
+
+
 @njit(cache=True)
 def retract_flat(ft, ser, thr, u, y, out):
     """``out = exp(u) y`` factor by factor (flat point ``y``, algebra vector ``u``)."""

@@ -44,8 +44,10 @@ class Product(LieGroup):
         sizes = [prod(f.point_shape) for f in factors]
         self._p_off = np.concatenate(([0], np.cumsum(sizes))).astype(int)
         self._a_off = np.concatenate(([0], np.cumsum([f.dim for f in factors]))).astype(int)
+        self._x_off = np.concatenate(([0], np.cumsum([prod(f.act_shape) for f in factors]))).astype(int)
         self.dim = int(self._a_off[-1])
         self.point_shape = (int(self._p_off[-1]),)
+        self.act_shape = (int(self._x_off[-1]),)
         self.name = " x ".join(f.name for f in factors)
 
     def __eq__(self, other):
@@ -111,9 +113,33 @@ class Product(LieGroup):
     def Ad(self, g):
         return _block_diag([f.Ad(p) for f, p in zip(self.factors, self.split(g))])
 
+    def hat(self, xi):
+        """Block diagonal of the factors' matrices."""
+        return _block_diag([f.hat(x) for f, x in zip(self.factors, self.split_algebra(np.asarray(xi, dtype=float)))])
+
+    def vee(self, m):
+        m = np.asarray(m, dtype=float)
+        parts, i = [], 0
+        for f in self.factors:
+            k = f.hat(np.zeros(f.dim)).shape[-1]
+            parts.append(f.vee(m[..., i : i + k, i : i + k]))
+            i += k
+        return np.concatenate(parts, axis=-1)
+
     def act(self, g, p):
-        """Componentwise action; ``p`` is a tuple with one point per factor."""
-        return tuple(f.act(gi, pi) for f, gi, pi in zip(self.factors, self.split(g), p))
+        """Componentwise action on the flat concatenation ``(..., act_shape)`` of one point
+        per factor (each flattened from ``Gi.act_shape``)."""
+        p = np.asarray(p, dtype=float)
+        out = []
+        for i, (f, gi) in enumerate(zip(self.factors, self.split(g))):
+            pi = p[..., self._x_off[i] : self._x_off[i + 1]].reshape(p.shape[:-1] + f.act_shape)
+            r = np.asarray(f.act(gi, pi))
+            out.append(r.reshape(r.shape[: r.ndim - len(f.act_shape)] + (-1,)))
+        batch = np.broadcast_shapes(*(x.shape[:-1] for x in out))
+        return np.concatenate([np.broadcast_to(x, batch + x.shape[-1:]) for x in out], axis=-1)
+
+    def normalize(self, g):
+        return self._map_points(lambda f, a: f.normalize(a), g)
 
     # -- closed forms componentwise
     def dexp(self, xi, v):
@@ -148,6 +174,7 @@ class Power(LieGroup):
         self._psize = prod(group.point_shape)
         self.dim = self.n * group.dim
         self.point_shape = (self.n * self._psize,)
+        self.act_shape = (self.n,) + tuple(group.act_shape)
         self.name = f"{group.name}^{self.n}"
 
     def __eq__(self, other):
@@ -201,8 +228,26 @@ class Power(LieGroup):
         return self._block(self.group.Ad(self.split(g)))
 
     def act(self, g, p):
-        """Copy ``i`` acts on ``p[..., i, :]``."""
+        """Copy ``i`` acts on ``p[..., i, :]`` (``act_shape = (N, *G.act_shape)``)."""
         return self.group.act(self.split(g), p)
+
+    def hat(self, xi):
+        """Block diagonal of the copies' matrices."""
+        m = self.group.hat(self.split_algebra(xi))
+        k = m.shape[-1]
+        out = np.zeros(m.shape[:-3] + (self.n * k, self.n * k))
+        for i in range(self.n):
+            out[..., i * k : (i + 1) * k, i * k : (i + 1) * k] = m[..., i, :, :]
+        return out
+
+    def vee(self, m):
+        m = np.asarray(m, dtype=float)
+        k = m.shape[-1] // self.n
+        blocks = np.stack([m[..., i * k : (i + 1) * k, i * k : (i + 1) * k] for i in range(self.n)], axis=-3)
+        return self._flat_algebra(self.group.vee(blocks))
+
+    def normalize(self, g):
+        return self.join(self.group.normalize(self.split(g)))
 
     def dexp(self, xi, v):
         return self._flat_algebra(self.group.dexp(self.split_algebra(xi), self.split_algebra(v)))

@@ -22,6 +22,7 @@ class Rn(LieGroup):
         self.n = int(n)
         self.dim = self.n
         self.point_shape = (self.n,)
+        self.act_shape = (self.n,)
         self.name = f"R{self.n}"
 
     def __eq__(self, other):
@@ -44,6 +45,16 @@ class Rn(LieGroup):
 
     def log(self, g):
         return np.array(g, dtype=float, copy=True)
+
+    def hat(self, xi):
+        """Translation generator ``[[0, xi], [0, 0]]``, ``(..., n + 1, n + 1)``."""
+        xi = np.asarray(xi, dtype=float)
+        out = np.zeros(xi.shape[:-1] + (self.n + 1, self.n + 1))
+        out[..., : self.n, self.n] = xi
+        return out
+
+    def vee(self, m):
+        return np.array(np.asarray(m, dtype=float)[..., : self.n, self.n], copy=True)
 
     def ad(self, xi):
         return np.zeros(np.shape(xi)[:-1] + (self.n, self.n))

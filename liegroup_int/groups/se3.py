@@ -44,6 +44,7 @@ class _SE3(LieGroup):
 
     dim = 6
     point_shape = (4, 4)
+    act_shape = (3,)
     name = "SE3"
 
     def identity(self, batch_shape=()):
@@ -97,6 +98,15 @@ class _SE3(LieGroup):
 
     def act(self, g, p):
         return np.einsum("...ij,...j->...i", g[..., :3, :3], p) + g[..., :3, 3]
+
+    def normalize(self, g):
+        """Newton-Schulz step on the rotation block, exact bottom row."""
+        from .so3 import SO3
+
+        out = np.array(g, dtype=float, copy=True)
+        out[..., :3, :3] = SO3.normalize(out[..., :3, :3])
+        out[..., 3, :] = (0.0, 0.0, 0.0, 1.0)
+        return out
 
     def dexp(self, xi, v):
         xi, v = np.asarray(xi, dtype=float), np.asarray(v, dtype=float)

@@ -133,6 +133,7 @@ class _SO3(LieGroup):
 
     dim = 3
     point_shape = (3, 3)
+    act_shape = (3,)
     name = "SO3"
 
     def identity(self, batch_shape=()):
@@ -164,6 +165,11 @@ class _SO3(LieGroup):
 
     def act(self, g, p):
         return np.einsum("...ij,...j->...i", g, p)
+
+    def normalize(self, g):
+        """One Newton-Schulz step toward the nearest rotation (see :meth:`LieGroup.normalize`)."""
+        R = np.asarray(g, dtype=float)
+        return 0.5 * R @ (3.0 * np.eye(3) - np.swapaxes(R, -1, -2) @ R)
 
     def dexp(self, xi, v):
         return dexp_so3(xi, v)

@@ -366,3 +366,42 @@ def test_broadcasting_single_against_batch(G, data):
     for i in np.ndindex(*BATCH):
         # 1e-15: as in test_batched_equals_loop.
         assert max_error(out[i], G.compose(g, h[i])) <= 1e-15
+
+
+# ----------------------------------------------------- 10. hat, vee, normalize, sample
+@group_params
+@given(data=st.data())
+def test_hat_vee_and_the_bracket(G, data):
+    """vee(hat(xi)) = xi exactly, and hat carries the bracket to the matrix commutator:
+    hat([xi, eta]) = hat(xi) hat(eta) - hat(eta) hat(xi) (ad and hat agree)."""
+    xi, eta = data.draw(algebra(G, "generic")), data.draw(algebra(G, "generic"))
+    np.testing.assert_array_equal(G.vee(G.hat(xi)), xi)
+    H, E = G.hat(xi), G.hat(eta)
+    # 1e-13: products of entries up to ~2 pi, summed over at most ~30 terms.
+    assert_close(G.hat(G.bracket(xi, eta)), H @ E - E @ H, 1e-13)
+
+
+@group_params
+def test_normalize_pulls_drifted_points_back(G):
+    """Valid points are kept to round-off; a drift e of the rotations becomes O(e^2)."""
+    rng = np.random.default_rng(11)
+    g = G.sample(rng, (5,))
+    assert g.shape == (5,) + G.point_shape
+    assert max_error(G.normalize(g), g) <= 4e-16 * 8
+    e = 1e-6
+    drifted = g * (1.0 + e * rng.standard_normal(g.shape))
+    fixed = G.normalize(drifted)
+    # the group's own constraint residual: log(exp(...)) round trips only on the group
+    assert max_error(G.exp(G.log(fixed)), fixed) <= max(1e-11, 50 * e * e)
+
+
+def test_compiled_normalize_equals_numpy():
+    from liegroup_int.groups.kernels_numba import normalize_rotations
+
+    rng = np.random.default_rng(5)
+    R = SO3.sample(rng, (7,)) + 1e-7 * rng.standard_normal((7, 3, 3))
+    out = R.copy()
+    normalize_rotations(out)
+    np.testing.assert_allclose(out, SO3.normalize(R), rtol=0, atol=1e-15)
+    I = np.swapaxes(out, -1, -2) @ out - np.eye(3)
+    assert np.abs(I).max() < 1e-12  # drift 1e-7 -> ~1e-14

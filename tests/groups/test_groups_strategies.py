@@ -141,10 +141,10 @@ def tangents(G: LieGroup, batch_shape: tuple[int, ...] = ()):
 
 
 def act_points(G: LieGroup, batch_shape: tuple[int, ...] = ()):
-    """Points of the space G acts on: 3-vectors for SO3/SE3, n-vectors for R^n,
-    ``(N, *)`` stacks for ``Power`` and tuples (one per factor) for ``Product``."""
+    """Points of the space G acts on (``G.act_shape``): 3-vectors for SO3/SE3, n-vectors
+    for R^n, ``(N, *)`` stacks for ``Power`` and flat concatenations for ``Product``."""
     if isinstance(G, Product):
-        return st.tuples(*(act_points(f, batch_shape) for f in G.factors))
+        return hnp.arrays(float, tuple(batch_shape) + G.act_shape, elements=st.floats(-3.0, 3.0))
     if isinstance(G, Power):
         return act_points(G.group, tuple(batch_shape) + (G.n,))
     n = G.n if isinstance(G, Rn) else 3

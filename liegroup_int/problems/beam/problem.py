@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
+from ...groups.so3 import SO3, angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
 from ...integrators import Problem
 from .kinematics import curvature_update, jr_times, rot, rot_T, strain_rates, strains
@@ -247,8 +247,7 @@ class BeamProblem(Problem):
         accumulates (measured ~6e-12 after 2e5 steps); the correction is quadratic in the
         orthogonality error, so it changes R by ~1e-24 and keeps it at ~1e-15 for ever.
         """
-        R = y.R
-        y.R = 0.5 * R @ (3.0 * np.eye(3) - np.swapaxes(R, -1, -2) @ R)
+        y.R = SO3.normalize(y.R)
         return y
 
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
