@@ -36,7 +36,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
-from liegroup_int import Product, Rn, SO3, integrate  # noqa: E402
+from liegroup_int import SO3, Product, Rn, integrate  # noqa: E402
 
 INERTIA = (1.0, 2.0, 3.0)
 W0 = (0.01, 5.0, 0.01)
