@@ -40,7 +40,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     a = ap.parse_args()
     tab = resolve_method(a.method)
-    print(f"| scene | n_ctrl | h_max (stable) | span | steps | rejected | generic us/step | fused us/step | speed-up |")
+    print("| scene | n_ctrl | h_max (stable) | span | steps | rejected | generic us/step | fused us/step | speed-up |")
     print("|---|---|---|---|---|---|---|---|---|")
     for name in a.scenes:
         pb = problem(load_scene(name, {"integrator.backend": "numba"}))

@@ -99,6 +99,7 @@ from liegroup_int.integrators import integrate_fixed, resolve_method, spectral_r
 from liegroup_int.integrators.result import BlowUpError, StepSizeError  # noqa: E402
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem  # noqa: E402
+from liegroup_int.studies import fit_rate  # noqa: E402
 
 CLOCK = time.process_time
 OUT: list[str] = []
@@ -128,9 +129,9 @@ def run(pb, y0, method: str, T: float, h: float, t_out=None, observer=None, t0: 
     return y, CLOCK() - start, stats.steps
 
 
-def slope(x, e):
-    x, e = np.asarray(x, float), np.asarray(e, float)
-    return float(np.polyfit(np.log(x), np.log(e), 1)[0])
+def slope(x, e) -> float:
+    """:func:`liegroup_int.studies.fit_rate` (nan below 3 points)."""
+    return fit_rate(x, e) if len(x) >= 3 else float("nan")
 
 
 def fmt(x: float, d: int = 3) -> str:

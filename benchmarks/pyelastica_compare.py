@@ -59,6 +59,8 @@ from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E4
 from liegroup_int.problems.beam import BeamProblem  # noqa: E402
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem as scene_problem  # noqa: E402
+from liegroup_int.bench.work_precision import fit_step  # noqa: E402
+from liegroup_int.studies import fit_rate  # noqa: E402
 
 IMG = os.path.join(ROOT, "docs", "img")
 
@@ -148,11 +150,6 @@ def run_ours(name: str, n_ctrl: int, dt: float, T: float, every: float, backend:
 
 
 # ----------------------------------------------------------------------------- peer
-def _divisor_step(dt: float, every: float) -> float:
-    """Largest step <= dt that divides ``every``."""
-    return every / int(np.ceil(every / dt - 1e-9))
-
-
 def find_dt_max(P, case, n: int, T: float, every: float):
     """Largest stable step from DT_FACTORS * dt_est (stable = finite and |tip| < 2 L).
     Returns ``(dt_max, dt_unstable, run_at_dt_max)`` (``dt_unstable``: the next larger
@@ -161,7 +158,7 @@ def find_dt_max(P, case, n: int, T: float, every: float):
     est = min(case.length / n / case.wave_speed, 2.0 / w_sr)
     bad = float("nan")
     for f in DT_FACTORS:
-        dt = _divisor_step(f * est, every)
+        dt = fit_step(f * est, every)
         r = P.run(case, n, dt, T, every)
         if r.finite and np.all(np.abs(r.tip) < 2 * case.length):
             return dt, bad, r
@@ -181,9 +178,11 @@ def diff_metrics(ref: dict, r) -> dict:
 
 
 def slope(n, e) -> float:
+    """:func:`liegroup_int.studies.fit_rate` over the points with a positive error (nan if
+    fewer than 3)."""
     n, e = np.asarray(n, float), np.asarray(e, float)
     ok = e > 0
-    return float(np.polyfit(np.log(n[ok]), np.log(e[ok]), 1)[0]) if ok.sum() >= 2 else float("nan")
+    return fit_rate(n[ok], e[ok]) if ok.sum() >= 3 else float("nan")
 
 
 def richardson(zs: dict, n_list) -> tuple[np.ndarray | None, float]:
@@ -344,7 +343,7 @@ def study(name, P, cfg, n_list, backend, cache, time_check=True):
     rows, rows_l, peers, peers_l, zs, zl = [], [], [], [], {}, {}
     for n in n_list:
         dt_max, dt_bad, _ = find_dt_max(P, case, n, T, every)
-        dt = _divisor_step(dt_max / 2, every)
+        dt = fit_step(dt_max / 2, every)
         r = P.run(case, n, dt, T, every)
         if not r.finite:
             raise RuntimeError(f"{name} n={n} dt={dt}: PyElastica run not finite")
