@@ -842,9 +842,9 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
                 continue
             d = defects.get(m)
             why = "" if d is None or abs(d[1]) < 1e-13 else (
-                f" Its tableau has coefficients up to {d[2]:.0f} (A) and {d[3]:.0f} (b); rounded to float64 they "
-                f"violate the second-order condition by {abs(d[1]):.0e} (the other tableaux: ~1e-16), a global "
-                f"error term that shrinks only like h.")
+                f" A likely cause: its tableau has coefficients up to {d[2]:.0f} (A) and {d[3]:.0f} (b); rounded to "
+                f"float64 they violate the second-order condition by {abs(d[1]):.0e} (the other tableaux: ~1e-16), "
+                f"a global error term that shrinks only like h.")
             parts.append(f"**{m} on the {name}** stops converging at about {pl[0]:.0e} (its two tightest tolerance "
                          f"decades gain {pl[1]:.1f}x in error).{why} ")
     geom_o = max(r["geom"] for r in rows + fb_rows if r["lib"] == "liegroup_int")

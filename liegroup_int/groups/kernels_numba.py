@@ -84,6 +84,25 @@ def _series(ser, k, t2):
     return out
 
 
+@njit(cache=True, inline="always")
+def _coef_AB(t, ser, thr):
+    """``(A, B)`` alone (the SO(3) exponential), same branches and formulas as
+    :func:`coefficients`."""
+    if t < thr:
+        t2 = t * t
+        return _series(ser, 0, t2), _series(ser, 1, t2)
+    sh = math.sin(0.5 * t) / t
+    return math.sin(t) / t, 2.0 * sh * sh
+
+
+@njit(cache=True, inline="always")
+def _coef_D(t, ser, thr):
+    """``D`` alone (the SO(3) dexpinv), same branches and formula as :func:`coefficients`."""
+    if t < thr:
+        return _series(ser, 3, t * t)
+    return (1.0 - 0.5 * t / math.tan(0.5 * t)) / (t * t)
+
+
 @njit(cache=True)
 def coefficients(t, ser, thr):
     """``(A, B, C, D, E, F)`` of :mod:`.so3_coefficients` at the angle ``t``."""
@@ -176,17 +195,18 @@ def normalize_rotations(R):
             R[i, a, 2] = h0 * a02 + h1 * a12 + h2 * a22
 
 
-@njit(cache=True)
-def retract_flat(ft, ser, thr, u, y, out):
-    """``out = exp(u) y`` factor by factor (flat point ``y``, algebra vector ``u``)."""
+@njit(cache=True, inline="always")
+def retract_flat(ft, ser, thr, u, y, out, po, ao):
+    """``out = exp(u) y`` factor by factor for the point at offset ``po`` of ``y``/``out``
+    and the algebra vector at offset ``ao`` of ``u``."""
     for r in range(ft.shape[0]):
-        kind, p, a, n = ft[r, 0], ft[r, 1], ft[r, 2], ft[r, 3]
+        kind, p, a, n = ft[r, 0], ft[r, 1] + po, ft[r, 2] + ao, ft[r, 3]
         if kind == KIND_RN:
             for k in range(n):
                 out[p + k] = y[p + k] + u[a + k]
         elif kind == KIND_SO3:
             x0, x1, x2 = u[a], u[a + 1], u[a + 2]
-            cA, cB, cC, cD, cE, cF = coefficients(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
+            cA, cB = _coef_AB(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
             _rotate(_exp_rot(cA, cB, x0, x1, x2), y, p, out, p, 3)
         else:  # SE3: exp(u) = [[E, J rho], [0, 1]], u = (rho, theta)
             r0, r1, r2 = u[a], u[a + 1], u[a + 2]
@@ -205,18 +225,19 @@ def retract_flat(ft, ser, thr, u, y, out):
                 out[p + k] = y[p + k]
 
 
-@njit(cache=True)
-def dexpinv_flat(ft, ser, thr, u, w, out):
-    """``out = dexpinv_u(w)`` factor by factor (``SO3``: ``J_l^-1``; ``SE3``: the block
-    inverse ``[[J^-1, -J^-1 Q J^-1], [0, J^-1]]``)."""
+@njit(cache=True, inline="always")
+def dexpinv_flat(ft, ser, thr, u, w, out, ao):
+    """``out = dexpinv_u(w)`` factor by factor at offset ``ao`` of ``u``, ``w``, ``out``
+    (``SO3``: ``J_l^-1``; ``SE3``: the block inverse ``[[J^-1, -J^-1 Q J^-1], [0, J^-1]]``;
+    ``w`` may be ``out``)."""
     for r in range(ft.shape[0]):
-        kind, a, n = ft[r, 0], ft[r, 2], ft[r, 3]
+        kind, a, n = ft[r, 0], ft[r, 2] + ao, ft[r, 3]
         if kind == KIND_RN:
             for k in range(n):
                 out[a + k] = w[a + k]
         elif kind == KIND_SO3:
             t0, t1, t2 = u[a], u[a + 1], u[a + 2]
-            cD = coefficients(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)[3]
+            cD = _coef_D(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
             out[a], out[a + 1], out[a + 2] = _dexpinv3(cD, t0, t1, t2, w[a], w[a + 1], w[a + 2])
         else:
             r0, r1, r2 = u[a], u[a + 1], u[a + 2]
@@ -229,12 +250,13 @@ def dexpinv_flat(ft, ser, thr, u, w, out):
             out[a + 3], out[a + 4], out[a + 5] = v0, v1, v2
 
 
-@njit(cache=True)
-def rotation_angle_flat(ft, u):
-    """Largest rotation angle of the rotational factors of ``u`` (0 if none; NaN wins)."""
+@njit(cache=True, inline="always")
+def rotation_angle_flat(ft, u, ao):
+    """Largest rotation angle of the rotational factors of ``u`` at offset ``ao`` (0 if
+    none; NaN wins)."""
     best = 0.0
     for r in range(ft.shape[0]):
-        kind, a = ft[r, 0], ft[r, 2]
+        kind, a = ft[r, 0], ft[r, 2] + ao
         if kind == KIND_RN:
             continue
         o = a if kind == KIND_SO3 else a + 3
@@ -246,11 +268,12 @@ def rotation_angle_flat(ft, u):
     return best
 
 
-@njit(cache=True)
-def magnitude_flat(ft, y, out):
-    """Error-norm scale of the flat point ``y`` (``|g|`` on vector parts, 1 on angles)."""
+@njit(cache=True, inline="always")
+def magnitude_flat(ft, y, out, po, ao):
+    """Error-norm scale of the point at offset ``po`` of ``y`` into offset ``ao`` of ``out``
+    (``|g|`` on vector parts, 1 on angles)."""
     for r in range(ft.shape[0]):
-        kind, p, a, n = ft[r, 0], ft[r, 1], ft[r, 2], ft[r, 3]
+        kind, p, a, n = ft[r, 0], ft[r, 1] + po, ft[r, 2] + ao, ft[r, 3]
         if kind == KIND_RN:
             for k in range(n):
                 out[a + k] = abs(y[p + k])
@@ -281,18 +304,18 @@ class CompiledGroup:
 
     def retract(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
         out = np.empty(self.point_shape)
-        retract_flat(self.ft, self.ser, self.thr, u, y.reshape(-1), out.reshape(-1))
+        retract_flat(self.ft, self.ser, self.thr, u, y.reshape(-1), out.reshape(-1), 0, 0)
         return out
 
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
         out = np.empty(w.shape)
-        dexpinv_flat(self.ft, self.ser, self.thr, u, w, out)
+        dexpinv_flat(self.ft, self.ser, self.thr, u, w, out, 0)
         return out
 
     def rotation_angle(self, u: np.ndarray) -> float:
-        return float(rotation_angle_flat(self.ft, u))
+        return float(rotation_angle_flat(self.ft, u, 0))
 
     def magnitude(self, y: np.ndarray) -> np.ndarray:
         out = np.empty(self.space.dim)
-        magnitude_flat(self.ft, y.reshape(-1), out)
+        magnitude_flat(self.ft, y.reshape(-1), out, 0, 0)
         return out

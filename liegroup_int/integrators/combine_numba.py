@@ -6,7 +6,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def combine_into(wts, m, total, Kf, h, out):
     """``out = h sum_{l < m} wts[l] Kf[l]`` in the cancellation-safe form of
     :func:`liegroup_int.integrators.rkmk.combine` (``total = sum(wts[:m])``):

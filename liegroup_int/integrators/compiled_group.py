@@ -33,30 +33,29 @@ def is_compiled_function(f) -> bool:
     return isinstance(f, CPUDispatcher)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def group_action(data, u, y, out):
     """``out = exp(u) y``, point by point."""
     ft, ser, thr, ps, dim = data[0], data[1], data[2], data[3], data[4]
     for j in range(y.shape[0] // ps):
-        retract_flat(ft, ser, thr, u[j * dim:(j + 1) * dim], y[j * ps:(j + 1) * ps], out[j * ps:(j + 1) * ps])
+        retract_flat(ft, ser, thr, u, y, out, j * ps, j * dim)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def group_dexpinv(data, u, w, out):
     """``out = dexpinv_u(w)``, point by point (``w`` may be ``out``)."""
     ft, ser, thr, dim = data[0], data[1], data[2], data[4]
     for j in range(u.shape[0] // dim):
-        a, b = j * dim, (j + 1) * dim
-        dexpinv_flat(ft, ser, thr, u[a:b], w[a:b], out[a:b])
+        dexpinv_flat(ft, ser, thr, u, w, out, j * dim)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def group_angle(data, u):
     """Largest rotation angle of ``u`` over all points (NaN wins)."""
     ft, dim = data[0], data[4]
     best = 0.0
     for j in range(u.shape[0] // dim):
-        a = rotation_angle_flat(ft, u[j * dim:(j + 1) * dim])
+        a = rotation_angle_flat(ft, u, j * dim)
         if a != a:
             return a
         if a > best:
@@ -64,12 +63,12 @@ def group_angle(data, u):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def group_scale(data, y, out):
     """Error scale of each point of ``y`` (``LieGroup.magnitude``)."""
     ft, ps, dim = data[0], data[3], data[4]
     for j in range(y.shape[0] // ps):
-        magnitude_flat(ft, y[j * ps:(j + 1) * ps], out[j * dim:(j + 1) * dim])
+        magnitude_flat(ft, y, out, j * ps, j * dim)
 
 
 def group_data(space, *extra) -> tuple:
@@ -104,7 +103,7 @@ def _user_rate(data, t, y, u, out):
         raise ValueError("f(t, y) must return a float array of shape (space.dim,)")
     for k in range(out.shape[0]):
         out[k] = w[k]
-    dexpinv_flat(data[0], data[1], data[2], u, out, out)
+    dexpinv_flat(data[0], data[1], data[2], u, out, out, 0)
     return 0.0
 
 

@@ -380,7 +380,9 @@ def engine_for(kernels: EngineKernels) -> Engine:
         copy = types.FunctionType(fn.__code__, ns, name, fn.__defaults__)
         copy.__qualname__ = f"{tag}.{name}"
         copy.__doc__ = fn.__doc__
-        ns[name] = njit(cache=kernels.cache)(copy)
+        # the step and the helpers are inlined into the two loops (numba IR inlining)
+        inline = "never" if name in ("_advance_fixed", "_advance_adaptive") else "always"
+        ns[name] = njit(cache=kernels.cache, inline=inline)(copy)
     eng = Engine(kernels, ns["_advance_fixed"], ns["_advance_adaptive"])
     _ENGINES[kernels] = eng
     return eng

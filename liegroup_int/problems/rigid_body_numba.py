@@ -24,7 +24,7 @@ _P_I, _P_MGCHI, _P_HEAVY = 0, 3, 6
 _N_PRM = 7
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def field_kernel(data, t, y, out):
     """``out = f(t, y)`` for ``N`` bodies: ``y`` flat ``(N, 12)`` (``R`` row by row, then
     ``W``), ``out`` flat ``(N, 6)`` (``R W``, ``dW/dt``). Returns 0 (no quadrature)."""
@@ -53,7 +53,7 @@ def field_kernel(data, t, y, out):
     return 0.0
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def rate_kernel(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
     field_kernel(data, t, y, out)
