@@ -195,7 +195,7 @@ def normalize_rotations(R):
             R[i, a, 2] = h0 * a02 + h1 * a12 + h2 * a22
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def retract_flat(ft, ser, thr, u, y, out, po, ao):
     """``out = exp(u) y`` factor by factor for the point at offset ``po`` of ``y``/``out``
     and the algebra vector at offset ``ao`` of ``u``."""
@@ -225,7 +225,7 @@ def retract_flat(ft, ser, thr, u, y, out, po, ao):
                 out[p + k] = y[p + k]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def dexpinv_flat(ft, ser, thr, u, w, out, ao):
     """``out = dexpinv_u(w)`` factor by factor at offset ``ao`` of ``u``, ``w``, ``out``
     (``SO3``: ``J_l^-1``; ``SE3``: the block inverse ``[[J^-1, -J^-1 Q J^-1], [0, J^-1]]``;
@@ -250,7 +250,7 @@ def dexpinv_flat(ft, ser, thr, u, w, out, ao):
             out[a + 3], out[a + 4], out[a + 5] = v0, v1, v2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def rotation_angle_flat(ft, u, ao):
     """Largest rotation angle of the rotational factors of ``u`` at offset ``ao`` (0 if
     none; NaN wins)."""
@@ -268,7 +268,7 @@ def rotation_angle_flat(ft, u, ao):
     return best
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def magnitude_flat(ft, y, out, po, ao):
     """Error-norm scale of the point at offset ``po`` of ``y`` into offset ``ao`` of ``out``
     (``|g|`` on vector parts, 1 on angles)."""
