@@ -469,9 +469,11 @@ def group_rows(rows, lib, variants=True):
 def float_coefficient_defects(methods):
     """Order-1/2 condition defects of each tableau *after rounding its coefficients to float64*.
 
-    Evaluated in exact rational arithmetic on the rounded values (effective ``c = A 1``), so
-    it shows what double precision can achieve with these coefficients, whatever the exact
-    tableau satisfies.
+    Evaluated in exact rational arithmetic on the rounded values, with the rounded ``c``:
+    the engine forms every stage increment as ``h (c_r K_0 + sum_l a_rl (K_l - K_0))`` and the
+    step as ``h (K_0 + sum_l b_l (K_l - K_0))`` (``rkmk.combine``), so the effective row sums
+    are ``c_r`` and the weights sum to 1 whatever the rounding of ``A`` and ``b``; the first
+    column is the defect ``sum(b) - 1`` of the rounded weights that this form removes.
     """
     from fractions import Fraction
 
@@ -479,11 +481,10 @@ def float_coefficient_defects(methods):
     for m in methods:
         try:
             tab = resolve_method(m)
-            A = [[Fraction(float(x)) for x in row] for row in np.asarray(tab.A_f)]
             b = [Fraction(float(x)) for x in np.asarray(tab.b_f)]
         except Exception:  # noqa: BLE001 - diagnostics only
             continue
-        c = [sum(row) for row in A]
+        c = [Fraction(float(x)) for x in np.asarray(tab.c_f)]
         out[m] = (float(sum(b) - 1), float(sum(bi * ci for bi, ci in zip(b, c)) - Fraction(1, 2)),
                   float(np.max(np.abs(np.asarray(tab.A_f)))), float(np.max(np.abs(np.asarray(tab.b_f)))))
     return out
