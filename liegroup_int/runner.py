@@ -146,21 +146,18 @@ class EnergyGuard:
         self.scale = max(self.scale, e)
 
 
-def write_plots(out_dir: Path, scene: Scene, sim, history: Path, shapes=None) -> list[str]:
-    """History PNG, and for problems that record shapes, a deformed-shape PNG (+ npz)."""
+def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None = None) -> list[str]:
+    """History PNG, and for problems that record shapes (``Simulation.snapshot``), a
+    deformed-shape PNG and shapes.npz."""
     from .io import plot_history, plot_shapes, read_history
 
     made = []
     data = read_history(history)
     if len(data.get("t", [])) >= 2:
         made.append(plot_history(data, out_dir / "history.png", title=scene.name).name)
-    if shapes is not None and len(shapes[0]) >= 2:
-        times, ctrl = shapes
-        u = np.linspace(0.0, 1.0, 101)
-        B = sim.problem.space.point_matrix(u)
-        line = np.einsum("uj,mjk->muk", B, ctrl)
-        np.savez_compressed(out_dir / "shapes.npz", t=times, control_points=ctrl, u=u, centreline=line)
-        made.append(plot_shapes(times, line, out_dir / "shapes.png", title=scene.name).name)
+    if shapes is not None and len(shapes["t"]) >= 2:
+        np.savez_compressed(out_dir / "shapes.npz", **shapes)
+        made.append(plot_shapes(shapes["t"], shapes["centreline"], out_dir / "shapes.png", title=scene.name).name)
     return made
 
 
@@ -346,9 +343,9 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         summary["final"] = sim.final_state(y_final) | {"t": t_reached}
     else:
         summary["error"] = error
-    if sim.snapshot is not None and getattr(sim.snapshot, "t", None):
-        shapes = (np.asarray(sim.snapshot.t), np.asarray(sim.snapshot.c))
-    summary["plots"] = write_plots(out_dir, scene, sim, history, shapes)
+    if sim.snapshot is not None and hasattr(sim.snapshot, "shapes"):
+        shapes = sim.snapshot.shapes()
+    summary["plots"] = write_plots(out_dir, scene, history, shapes)
     write_json(out_dir / "summary.json", summary)
     if error is not None:
         raise RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are in {out_dir})")

@@ -289,15 +289,34 @@ def diagnostics(pb: BeamProblem, names) -> dict:
 
 
 class ShapeRecorder:
-    """Keeps the control points (and times) at output times, for shape plots."""
+    """Keeps the control points (and times) at output times, for shape plots.
 
-    def __init__(self):
+    Parameters
+    ----------
+    space : CollocationSpace, optional
+        Evaluates the centreline in :meth:`shapes` (without one, only the control points).
+    """
+
+    def __init__(self, space=None, n_points: int = 101):
+        self.space = space
+        self.n_points = n_points
         self.t: list[float] = []
         self.c: list[np.ndarray] = []
 
     def __call__(self, t, y):
         self.t.append(float(t))
         self.c.append(y.c.copy())
+
+    def shapes(self) -> dict | None:
+        """``{"t", "control_points", "u", "centreline"}`` of the recorded outputs
+        (``Simulation.snapshot``: the runner plots ``centreline`` against ``t`` and stores
+        all in shapes.npz); ``None`` before two outputs."""
+        if len(self.t) < 2 or self.space is None:
+            return None
+        u = np.linspace(0.0, 1.0, self.n_points)
+        ctrl = np.asarray(self.c)
+        line = np.einsum("uj,mjk->muk", self.space.point_matrix(u), ctrl)
+        return {"t": np.asarray(self.t), "control_points": ctrl, "u": u, "centreline": line}
 
 
 def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
@@ -336,7 +355,7 @@ def build(scene: Scene) -> Simulation:
         "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
     }
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
-                     final_state=final_state, info=info, snapshot=ShapeRecorder(),
+                     final_state=final_state, info=info, snapshot=ShapeRecorder(pb.space),
                      to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a),
                      conserved=pb.mechanical_energy, stability=stability(scene, pb),
                      frames=_frames(pb))

@@ -138,6 +138,10 @@ class Simulation:
         energy, whose change is the work of the loads): the energy balance.
     stability : Stability, optional
         Hooks of the run guards (stable step, spectrum probe, failure diagnosis).
+    snapshot : callable, optional
+        An observer ``(t, y)`` run at output times whose ``shapes()`` returns ``None`` or a
+        dict with ``t (k,)`` and ``centreline (k, m, 3)`` (plus any arrays to keep): the
+        runner draws shapes.png from it and stores the dict in shapes.npz.
     frames : callable, optional
         ``frames(y) -> (points (m, 3), frames (m, 3, 3), point_data)``: a curve with
         section frames, written as a ParaView series when the scene asks for it
