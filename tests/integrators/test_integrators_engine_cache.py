@@ -1,0 +1,36 @@
+"""The compiled engine's loops are cached on disk: a second process loads them instead of
+compiling (numba ``cache=True`` through the engine's per-plugin copies)."""
+
+import json
+import subprocess
+import sys
+
+SCRIPT = """
+import json, numpy as np
+from liegroup_int.integrators import integrate_adaptive, integrate_fixed, resolve_method
+from liegroup_int.integrators.engine import _ENGINES
+from liegroup_int.problems import RigidBody
+body = RigidBody(inertia=(1.0, 1.0, 0.5), mass=1.0, com=(0.0, 0.0, 0.5))
+y0 = body.state(np.eye(3), np.array([0.3, 0.0, 10.0]))
+integrate_fixed(body.problem(), resolve_method("rkmk4"), (0.0, 0.01), y0, 1e-3)
+integrate_adaptive(body.problem(), resolve_method("rkmk45"), (0.0, 0.01), y0)
+out = {}
+for k, e in _ENGINES.items():
+    for name in ("advance_fixed", "advance_adaptive"):
+        st = getattr(e, name).stats
+        out[k.name + "." + name] = [sum(st.cache_hits.values()), sum(st.cache_misses.values())]
+print(json.dumps(out))
+"""
+
+
+def _run() -> dict:
+    done = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=600, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_a_second_process_loads_the_compiled_loops():
+    _run()  # compiles if the cache is cold (or stale), else loads
+    second = _run()
+    assert set(second) == {"rigid_body.advance_fixed", "rigid_body.advance_adaptive"}
+    for name, (hits, misses) in second.items():
+        assert (hits, misses) == (1, 0), (name, hits, misses)
