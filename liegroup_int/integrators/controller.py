@@ -30,6 +30,11 @@ class PIController:
     (``fac_min`` if ``err`` is not finite), and if the step's rotation ``angle`` exceeded
     the bound ``max_angle``, the factor is at most ``max_angle / (2 angle)``.
 
+    Rotation rate. Once the rotation guard has rejected a step, the loops keep the rotation
+    rate ``omega = angle / h`` measured at every attempt (:func:`rotation_rate`) and cap
+    every proposal at ``safety * max_angle / omega`` (:func:`rotation_cap`), so that the
+    controller does not alternate between a guard rejection and an accepted step.
+
     Parameters
     ----------
     safety : float
@@ -102,3 +107,21 @@ def h_rejected(err, angle, h_try, max_angle, g):
     fac = fac if fac > g[G_FAC_MIN] else g[G_FAC_MIN]
     fac = fac if fac < 1.0 else 1.0
     return h_try * fac
+
+
+def rotation_rate(angle, h_try, max_angle, rate):
+    """The rotation rate to remember after an attempt of size ``h_try`` whose increment
+    rotated by ``angle``: measured (``angle / h_try``) once the guard has rejected a step
+    (``angle > max_angle`` now, or ``rate > 0`` from before), else ``rate`` (0: none yet)."""
+    if angle > max_angle or rate > 0:
+        return angle / h_try
+    return rate
+
+
+def rotation_cap(h, rate, max_angle, g):
+    """``h`` capped at ``safety * max_angle / rate`` when a rotation rate is known."""
+    if rate > 0:
+        cap = g[G_SAFETY] * max_angle / rate
+        if cap < h:
+            return cap
+    return h

@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from ..tableaux import ButcherTableau
-from .controller import DEFAULT_CONTROLLER, PIController, h_accepted, h_rejected
+from .controller import DEFAULT_CONTROLLER, PIController, h_accepted, h_rejected, rotation_cap, rotation_rate
 from .problem import Problem
 from .result import BlowUpError, Stats, StepSizeError
 from .rkmk import error_estimate, error_norm, rkmk_step_fsal, step_quadrature
@@ -248,6 +248,7 @@ def integrate_adaptive(
     t, y = t0, y0
     h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
     err_prev = controller.err_floor
+    rate = 0.0  # rotation rate once the guard has rejected a step (controller.rotation_rate)
     if observer is not None:
         observer(t, y)
     start = time.perf_counter()
@@ -255,13 +256,13 @@ def integrate_adaptive(
     while i_stop < len(stops):
         stop = stops[i_stop]
         if stepper is not None:  # every attempt up to ``stop`` in one compiled call
-            res = stepper.advance_to(t, y, stop, h, err_prev, rtol, atol, h_max, max_steps - stats.steps,
+            res = stepper.advance_to(t, y, stop, h, err_prev, rate, rtol, atol, h_max, max_steps - stats.steps,
                                      max_increment_angle, gains)
             stats.accept_many(res.steps, res.h_min, res.h_max)
             stats.quadrature += res.quadrature
             stats.rejected += res.rejected
             stats.rhs_evals += res.rhs_evals
-            t, y, h, err_prev = res.t, res.y, res.h, res.err_prev
+            t, y, h, err_prev, rate = res.t, res.y, res.h, res.err_prev, res.rate
             if res.status == "max-steps":
                 raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
             if res.status == "underflow":
@@ -283,6 +284,7 @@ def integrate_adaptive(
         angle = problem.rotation_angle(u)
         if not np.isfinite(err):
             err = np.inf
+        rate = rotation_rate(angle, h_try, max_increment_angle, rate)
         if err <= 1.0 and angle <= max_increment_angle:
             t = stop if land else t + h_try
             y = y_new
@@ -291,6 +293,7 @@ def integrate_adaptive(
             if Q is not None:
                 stats.quadrature += step_quadrature(tab, Q, h_try)
             h, err_prev = h_accepted(err, err_prev, h_try, h_max, gains)
+            h = rotation_cap(h, rate, max_increment_angle, gains)
             if monitor is not None:
                 monitor(t, y, stats)
             if land:
@@ -299,7 +302,8 @@ def integrate_adaptive(
                 i_stop += 1
         else:
             stats.rejected += 1
-            h = h_rejected(err, angle, h_try, max_increment_angle, gains)
+            h = rotation_cap(h_rejected(err, angle, h_try, max_increment_angle, gains), rate, max_increment_angle,
+                             gains)
             if h < 1e-14 * max(1.0, abs(t)):
                 raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
     stats.wall_time_s += time.perf_counter() - start

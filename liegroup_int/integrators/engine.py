@@ -58,6 +58,8 @@ _ADAPTIVE_STATUS = {ADAPTIVE_OK: "ok", ADAPTIVE_MAX_STEPS: "max-steps", ADAPTIVE
 
 _h_accepted = njit(cache=True)(_controller.h_accepted)
 _h_rejected = njit(cache=True)(_controller.h_rejected)
+_rotation_rate = njit(cache=True)(_controller.rotation_rate)
+_rotation_cap = njit(cache=True)(_controller.rotation_cap)
 
 
 @njit(cache=True)
@@ -271,13 +273,14 @@ def _error_norm(err, s0, s1, rtol, atol):
     return math.sqrt(acc / err.shape[0])
 
 
-def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rtol, atol, h_max,
+def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate, rtol, atol, h_max,
                       max_steps_left, max_angle, g):
     """Accepted and rejected embedded steps from ``(t, y)`` until landing on ``stop``: the
     loop body of :func:`~liegroup_int.integrators.drivers.integrate_adaptive` for one
-    output time, controller gains ``g`` (:meth:`PIController.gains`).
+    output time, controller gains ``g`` (:meth:`PIController.gains`) and memory
+    ``err_prev``, ``rate`` (:func:`~.controller.rotation_rate`).
 
-    Returns ``(y, t, h, err_prev, steps, rejected, attempts, h_min, h_max, status,
+    Returns ``(y, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max, status,
     quadrature, evals)``.
     """
     s = b.shape[0]
@@ -293,8 +296,8 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rtol,
     SCALE(data, y0, sc0)
     while True:
         if steps >= max_steps_left:
-            return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS, quad,
-                    evals)
+            return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS,
+                    quad, evals)
         land = t + h >= stop - land_tol
         h_try = stop - t if land else h
         q, ev, q_last = _step(data, A, b, cc, fsal, y0, t, h_try, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0,
@@ -307,6 +310,7 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rtol,
         ang = ANGLE(data, uv)
         if not math.isfinite(err):
             err = np.inf
+        rate = _rotation_rate(ang, h_try, max_angle, rate)
         if err <= 1.0 and ang <= max_angle:
             t = stop if land else t + h_try
             y0, y1 = y1, y0
@@ -318,18 +322,19 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rtol,
             h_min_acc = h_try if h_try < h_min_acc else h_min_acc
             h_max_acc = h_try if h_try > h_max_acc else h_max_acc
             h, err_prev = _h_accepted(err, err_prev, h_try, h_max, g)
+            h = _rotation_cap(h, rate, max_angle, g)
             if land:
-                return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_OK, quad,
-                        evals)
+                return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_OK,
+                        quad, evals)
         else:
             rejected += 1
             if fsal and not have_f0:  # K[0] = f(t, y0): the retry starts from it
                 F[i0, :] = K[0]
                 have_f0, q0 = True, qs[0]
-            h = _h_rejected(err, ang, h_try, max_angle, g)
+            h = _rotation_cap(_h_rejected(err, ang, h_try, max_angle, g), rate, max_angle, g)
             if h < 1e-14 * max(1.0, abs(t)):
-                return (y0, t, h, err_prev, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_UNDERFLOW,
-                        quad, evals)
+                return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc,
+                        ADAPTIVE_UNDERFLOW, quad, evals)
 
 
 # ====================================================================== specialization
@@ -424,7 +429,7 @@ class CompiledStepper:
         return Advance(cp.unpack(yf), float(t), int(steps), float(h_min), float(h_max), _FIXED_STATUS[status],
                        float(t_fail), float(ang), float(quad), int(evals))
 
-    def advance_to(self, t, y, stop, h, err_prev, rtol, atol, h_max, max_steps_left, max_angle,
+    def advance_to(self, t, y, stop, h, err_prev, rate, rtol, atol, h_max, max_steps_left, max_angle,
                    gains) -> AdaptiveAdvance:
         """Accepted and rejected steps from ``(t, y)`` until landing on ``stop`` (``y`` not
         modified); ``gains`` from :meth:`~.controller.PIController.gains`. See
@@ -434,12 +439,12 @@ class CompiledStepper:
         cp, flat = self.cp, self.cp.pack(y)
         out = self.engine.advance_adaptive(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.e,
                                            self.fsal, flat, float(t), float(stop), float(h), float(err_prev),
-                                           float(rtol), float(atol), float(h_max), int(max_steps_left),
+                                           float(rate), float(rtol), float(atol), float(h_max), int(max_steps_left),
                                            float(max_angle), np.asarray(gains, dtype=float))
-        yf, t, h, err_prev, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out
+        yf, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out
         return AdaptiveAdvance(cp.unpack(yf), float(t), float(h), float(err_prev), int(steps), int(rejected),
                                int(attempts), float(h_min), float(h_max_acc), _ADAPTIVE_STATUS[status], float(quad),
-                               int(evals))
+                               int(evals), float(rate))
 
 
 def compiled_stepper(problem, tab) -> CompiledStepper | None:

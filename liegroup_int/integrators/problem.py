@@ -95,6 +95,9 @@ class AdaptiveAdvance:
         ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
     rhs_evals : int
         Vector-field evaluations made.
+    rate : float
+        Controller memory: the rotation rate once the guard has rejected a step, else 0
+        (:func:`~liegroup_int.integrators.controller.rotation_rate`).
     """
 
     y: object
@@ -109,6 +112,7 @@ class AdaptiveAdvance:
     status: str
     quadrature: float = 0.0
     rhs_evals: int = 0
+    rate: float = 0.0
 
 
 class Problem(ABC):

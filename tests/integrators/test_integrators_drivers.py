@@ -63,6 +63,10 @@ def test_adaptive_counts_rejections_and_guards_rotation():
     sol = integrate(b.problem(), y0, (0.0, 0.2), method="rkmk45", rtol=1e-3, atol=1e-3, monitor=monitor,
                     max_increment_angle=0.5)
     assert max(angles) <= 0.5 + 1e-12
+    # after the first guard rejection the steps are capped at 0.9 * 0.5 rad / (200 rad/s)
+    # (controller.rotation_cap): 89 steps for 0.2 s and no more rejections (before the cap
+    # every accepted step followed a rejection: 159 and 159)
+    assert sol.stats.rejected <= 2 and sol.stats.steps <= int(np.ceil(0.2 / (0.9 * 0.5 / 200.0))) + 1, sol.stats
     R, _ = b.split(sol.y_final)
     np.testing.assert_allclose(R, SO3.exp(np.array([0.0, 0.0, 40.0])), atol=1e-3)
 

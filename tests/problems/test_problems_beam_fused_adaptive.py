@@ -217,8 +217,8 @@ def test_the_hook_exists_only_where_it_should():
     pb, _ = _scene("cantilever")
     assert isinstance(compiled_stepper(pb, resolve_method("rkmk45")), CompiledStepper)
     with pytest.raises(ValueError, match="no embedded pair"):  # a fixed-step method has no adaptive loop
-        compiled_stepper(pb, resolve_method("rkmk4")).advance_to(0.0, pb.initial_state(), 1.0, 0.1, 1e-4, 1e-6,
-                                                                   1e-9, 1.0, 10, 1.0, ())
+        compiled_stepper(pb, resolve_method("rkmk4")).advance_to(0.0, pb.initial_state(), 1.0, 0.1, 1e-4, 0.0,
+                                                                   1e-6, 1e-9, 1.0, 10, 1.0, ())
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy")
     assert compiled_stepper(np_pb, resolve_method("rkmk45")) is None
     assert Problem.compiled_kernels(None) is None
