@@ -134,7 +134,9 @@ def test_blow_up_gives_failed_row(tmp_path):
     assert json.loads((tmp_path / "run_000" / "summary.json").read_text())["status"] == "failed"
     table = convergence_table(rows + [_fake_ok(0.5e-6)], "integrator.dt", quantity="tip")
     assert table[0]["error"] is None and table[0]["status"] == "failed"
-    write_study(tmp_path, rows)  # failed rows are written too
+    written = write_study(tmp_path, rows)  # failed rows are written too
+    csv = next(p for p in written if p.name == "study.csv").read_text().splitlines()
+    assert len(csv) == 2 and "failed" in csv[1] and "beyond the stability limit" in csv[1]
 
 
 def _fake_ok(dt):

@@ -1,6 +1,7 @@
 """Collocation space: arc-length basis matrices, solver and reference geometry."""
 
 import numpy as np
+from scipy.interpolate import BSpline
 import pytest
 
 from liegroup_int.iga.collocation import CollocationSpace, default_reference_vector, vee
@@ -159,7 +160,12 @@ def test_basis_matrices_consistency(arch, helix, beam):
         n = sp.n_ctrl
         for m in (sp.N0, sp.N1, sp.N2):
             assert m.shape == (n, n)
-        np.testing.assert_allclose(sp.N0, sp.point_matrix(sp.u_c), atol=0)
+        # N0 against an independent evaluation: scipy's B-spline design matrix, made rational
+        # with the weights (R = N w / (N . w)); agreement to a few ulps of the O(1) entries
+        c = sp.curve
+        B = BSpline.design_matrix(sp.u_c, c.knots, c.degree).toarray()
+        w = np.ones(n) if c.weights is None else np.asarray(c.weights, dtype=float)
+        np.testing.assert_allclose(sp.N0, B * w / (B @ w)[:, None], rtol=0, atol=1e-14)
         np.testing.assert_allclose(sp.N0.sum(axis=1), 1.0, atol=1e-14)
         np.testing.assert_allclose(sp.N1.sum(axis=1) / np.abs(sp.N1).max(), 0.0, atol=1e-13)
         np.testing.assert_allclose(sp.N2.sum(axis=1) / np.abs(sp.N2).max(), 0.0, atol=1e-13)

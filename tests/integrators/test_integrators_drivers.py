@@ -108,8 +108,12 @@ def test_product_tuple_initial_state():
 
 
 def test_every_named_method_resolves():
+    """Each method name resolves to the tableau registered under it (name round trip), in
+    any case, with one weight per stage."""
     for name in METHODS:
-        assert resolve_method(name).stages >= 1
+        tab = resolve_method(name)
+        assert tab.method == name and resolve_method(name.upper()) is tab
+        assert len(tab.b_f) == tab.stages == len(tab.c_f)
 
 
 def test_batched_bodies_match_single_runs():

@@ -48,20 +48,23 @@ def test_fixed_step_order(method, reference):
 
 # the embedded pairs by their propagated weights, on the same problem; this checks the
 # weights as implemented in floating point, including the cancellation-safe stage sums
-# that Verner's pair (|a_ij| up to 208) needs. Verner's pair has small principal error
-# coefficients: in the range where its error is above round-off it is measured at
-# slope 7.0, so for the pairs the fit must reach at least the nominal order - 0.3.
+# that Verner's pair (|a_ij| up to 208) needs. Each pair has its own window (order, low,
+# high): the nominal order - 0.3 below, and above it what the pair's error constants give
+# in the range of steps where its error is well above round-off (measured fits: rkmk32
+# 2.94; rkmk45 5.38, Dormand-Prince's small fifth-order constant lets the sixth-order term
+# show at these steps; rkmk65 7.08, Verner's sixth-order constants are smaller still), with
+# 0.2-0.3 of margin for the fit.
 PAIR_CASES = {
-    "rkmk32": (3, [0.02, 0.01, 0.005]),
-    "rkmk45": (5, [0.04, 0.02, 0.01]),
-    "rkmk65": (6, [0.08, 0.04, 0.02]),
+    "rkmk32": (3, [0.02, 0.01, 0.005], 2.7, 3.3),
+    "rkmk45": (5, [0.04, 0.02, 0.01], 4.7, 5.6),
+    "rkmk65": (6, [0.08, 0.04, 0.02], 5.7, 7.3),
 }
 
 
 @pytest.mark.parametrize("method", sorted(PAIR_CASES))
 def test_pair_propagated_order(method, reference):
-    order, hs = PAIR_CASES[method]
+    order, hs, low, high = PAIR_CASES[method]
     errs = [np.abs(integrate(TOP.problem(), Y0, (0.0, T), method=method, dt=h).y_final - reference).max() for h in hs]
     assert min(errs) > 1e-11, errs
     slope = fitted_order(hs, errs)
-    assert order - 0.3 < slope < order + 1.3, f"{method}: fitted order {slope:.3f}, errors {errs}"
+    assert low < slope < high, f"{method}: fitted order {slope:.3f} outside ({low}, {high}), errors {errs}"

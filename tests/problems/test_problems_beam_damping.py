@@ -15,7 +15,7 @@ from liegroup_int.problems.beam.kinematics import strains
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
 
-EI_ROLLUP = 3.0679615757712823  # E I of the rollup scene [N m^2]
+EI_ROLLUP = problem(load_scene("rollup")).constants.CM[1]  # E I2 of the rollup scene's section [N m^2]
 
 
 def _rollup_arc(n_ctrl, tau):

@@ -71,6 +71,20 @@ def _run(body, y0, t_span, dt, fused, tab=TAB, t_out=None, max_angle=1.0):
         return exc, stats, rec
 
 
+@pytest.fixture
+def advance_calls(monkeypatch):
+    """Counts the calls of the compiled engine's fixed-step loop."""
+    calls = []
+    original = CompiledStepper.advance
+
+    def counted(self, *args):
+        calls.append(args[4])  # n_steps
+        return original(self, *args)
+
+    monkeypatch.setattr(CompiledStepper, "advance", counted)
+    return calls
+
+
 def _same_stats(a, b, tab=None, calls=1):
     """Equal counters. Both loops reuse the last stage of an FSAL pair as the next first one
     (one evaluation less per step); the generic loop keeps it across output times
@@ -114,13 +128,15 @@ def test_the_stepper_exists_only_where_it_should():
 @pytest.mark.parametrize("batch", [(), (5,), (2, 3)], ids=["single", "batch5", "batch2x3"])
 @pytest.mark.parametrize("kind", sorted(BODIES))
 @pytest.mark.parametrize("method", sorted(METHODS))
-def test_every_tableau_agrees_with_the_generic_loop(method, kind, batch):
+def test_every_tableau_agrees_with_the_generic_loop(method, kind, batch, advance_calls):
     body, tab = BODIES[kind], resolve_method(method)
     y0 = _states(body, batch)
     keep = y0.copy()
     t_out = [0.05, 0.05, 0.3, 0.7]  # several advance calls, a repeated output time, short last steps
     (t1, y1), st1, rec1 = _run(body, y0, (0.0, 1.0), 7e-3, True, tab, t_out)
+    assert len(advance_calls) == len(t_out) + 1  # the compiled engine took every interval
     (t2, y2), st2, rec2 = _run(body, y0, (0.0, 1.0), 7e-3, False, tab, t_out)
+    assert len(advance_calls) == len(t_out) + 1  # and the monitored run none
     np.testing.assert_array_equal(y0, keep)  # the start state is not modified
     assert t1 == t2 == 1.0 and y1.shape == y2.shape == y0.shape
     assert rec1.t == rec2.t
