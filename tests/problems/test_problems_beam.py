@@ -115,16 +115,10 @@ def test_spectrum_at_rest_is_imaginary(name, expected):
     # regression pin, not derived: the values method.md 3b records for p=4, n_ctrl=31
     # (~3.1e4 pendulum, ~2.4e6 cantilever, about twice the cut-off), +-2 %
     assert abs(lam / expected - 1) < 0.02
-    # purely imaginary up to the finite-difference error of the Jacobian (~1e-6 relative)
+    # purely imaginary up to the finite-difference error of the Jacobian (~1e-6 relative);
+    # for the hinged pendulum this is also the check of the s = 0 Neumann sign: written
+    # (m_c - m) instead of (m_c + m) it gets a real positive eigenvalue (method.md 3)
     assert np.abs(ev.real).max() < 1e-6 * lam
-
-
-def test_pendulum_s0_neumann_sign():
-    # with the s=0 moment residual written (m_c - m) instead of (m_c + m), the hinged
-    # pendulum gets a real positive eigenvalue (method.md 3); ours has none
-    pb = problem(load_scene("pendulum"))
-    ev = eigenvalues(pb, 0.0, pb.initial_state())
-    assert ev.real.max() < 1e-6 * np.abs(ev).max()
 
 
 # ---------------------------------------------------------------- energy

@@ -81,7 +81,6 @@ def test_rk6_stability_polynomial_has_nonexp_last_term():
 
 def test_imaginary_axis_limits_known_values():
     assert imaginary_axis_limit(RK4) == pytest.approx(2 * math.sqrt(2), abs=1e-12)
-    assert imaginary_axis_limit(RK4) == pytest.approx(2.828427, abs=1e-6)
     assert imaginary_axis_limit(RK3) == pytest.approx(math.sqrt(3), abs=1e-12)
     assert imaginary_axis_limit(BS32) == pytest.approx(math.sqrt(3), abs=1e-12)
     for tab in (EULER, RK2, RK6):
