@@ -40,7 +40,9 @@ def test_rollup_arc_spurious_growth_removed_by_kelvin_voigt():
     # 1/s at |Im| = 71, proportional to tau and the same at n_ctrl = 21, 31, 41 (0.0182,
     # 0.0174, 0.0173): an out-of-plane mode destabilized by damping under the dead (non-
     # conservative in 3D) end couple, not a discretization artifact. Bounds: 10 1/s below the
-    # undamped value, 3x above the damped one (finite-difference noise is ~1e-4).
+    # undamped value, 3x above the damped one (finite-difference noise is ~1e-4); for the
+    # modes above 200 1/s the Kelvin-Voigt law itself gives Re lambda = -tau omega^2 / 2 =
+    # -0.2 1/s at omega = 200 1/s (damping ratio tau omega / 2), asserted with half of it.
     pb, y = _rollup_arc(21, 0.0)
     assert np.max(spectrum.eigenvalues(pb, 100.0, y).real) > 10.0
     pb, y = _rollup_arc(21, 1e-5)
@@ -133,4 +135,6 @@ def test_kelvin_voigt_dissipates_energy():
     e0, e1 = out[0.0]
     d0, d1 = out[1e-6]
     assert abs(e1 - e0) < 0.05 * e0  # measured +1.4 % (collocation is not conservative)
-    assert d1 < 0.01 * d0  # measured 6.8e-5 (the bent shape is rich in high modes)
+    assert d1 < e1  # damping only removes energy (the undamped run keeps it)
+    # regression pin: measured 6.8e-5 (the bent shape is rich in high modes), bound two orders above
+    assert d1 < 0.01 * d0
