@@ -215,7 +215,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         st = resume["stats"]
         stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
                       wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
-                      quadrature=st.get("quadrature", 0.0))
+                      quadrature=st.get("quadrature", 0.0), controller=resume["meta"].get("controller"))
         if scene.t_end <= t0:
             raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
     # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
@@ -276,6 +276,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         last["t"], last["y"] = t, y
         if balance is not None:
             meta["energy_scale"] = balance.scale
+        if stats.controller is not None:  # adaptive runs: resumed runs continue from it
+            meta["controller"] = dict(stats.controller)
 
     observers.append(remember)
     if balance is not None:  # after the writers, so the failing row is on disk

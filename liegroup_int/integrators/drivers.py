@@ -246,9 +246,18 @@ def integrate_adaptive(
     f0 = None  # f(t, y) of the current state, once known (FSAL pairs; kept over rejections)
     gains = controller.gains(tab)
     t, y = t0, y0
-    h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
-    err_prev = controller.err_floor
-    rate = 0.0  # rotation rate once the guard has rejected a step (controller.rotation_rate)
+    memory = stats.controller  # continued run: the controller as it was at its last output
+    if memory is not None and h0 is None:
+        h, err_prev, rate = min(memory["h"], h_max), memory["err_prev"], memory["rate"]
+    else:
+        h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
+        err_prev = controller.err_floor
+        rate = 0.0  # rotation rate once the guard has rejected a step (controller.rotation_rate)
+
+    def remember():  # the controller's memory, kept in the stats at every output time
+        stats.controller = {"h": float(h), "err_prev": float(err_prev), "rate": float(rate)}
+
+    remember()
     if observer is not None:
         observer(t, y)
     start = time.perf_counter()
@@ -267,6 +276,7 @@ def integrate_adaptive(
                 raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
             if res.status == "underflow":
                 raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
+            remember()
             if observer is not None:
                 observer(t, y)
             i_stop += 1
@@ -297,6 +307,7 @@ def integrate_adaptive(
             if monitor is not None:
                 monitor(t, y, stats)
             if land:
+                remember()
                 if observer is not None:
                     observer(t, y)
                 i_stop += 1

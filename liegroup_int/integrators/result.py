@@ -28,6 +28,11 @@ class Stats:
         (:meth:`Problem.quadrature_rate`: the beam's external power, so this is the work
         of its loads), formed with the step's weights ``h sum_r b_r q(t_r, y_r)``; 0 for
         other problems.
+    controller : dict or None
+        Memory of the adaptive controller at the last output time (``h``: the next step to
+        try, ``err_prev``, ``rate``; ``None`` before an adaptive run). An adaptive run given
+        stats with it continues from it, so a run resumed from a checkpoint at an output
+        time takes the same steps as one that never stopped. Not part of :meth:`as_dict`.
     """
 
     steps: int = 0
@@ -37,6 +42,7 @@ class Stats:
     h_min: float = np.inf
     h_max: float = 0.0
     quadrature: float = 0.0
+    controller: dict | None = None
 
     def accept(self, h: float) -> None:
         self.steps += 1

@@ -22,7 +22,15 @@ def _final_state(d):
 @pytest.mark.parametrize("scene, sets, T", [
     ("heavy_top", ["output.every=0.05"], 1.0),
     ("cantilever", ["output.every=1e-5", "space.n_ctrl=11", "integrator.dt=2e-6"], 2e-4),
-])
+    # an adaptive pair (the controller's memory crosses the checkpoint), the NumPy backend,
+    # and a time-varying load (a ramp across the resume time)
+    ("heavy_top", ["output.every=0.05", "integrator.dt=none", "integrator.method=rkmk45", "integrator.rtol=1e-6",
+                   "integrator.atol=1e-9"], 1.0),
+    ("cantilever", ["output.every=1e-5", "space.n_ctrl=11", "integrator.dt=2e-6", "integrator.backend=numpy"],
+     1e-4),
+    ("cantilever", ["output.every=1e-5", "space.n_ctrl=11", "integrator.dt=2e-6", "loads.end.profile=ramp",
+                    "loads.end.ramp=1.5e-4"], 2e-4),
+], ids=["heavy_top", "cantilever", "heavy_top-rkmk45", "cantilever-numpy", "cantilever-ramp"])
 def test_resumed_run_is_bitwise_identical(tmp_path, scene, sets, T):
     s = sum((["--set", x] for x in sets), [])
     full, half = tmp_path / "full", tmp_path / "half"
