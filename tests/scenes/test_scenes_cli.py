@@ -1,5 +1,6 @@
 """Scenes and the command line: loading, overrides, errors, outputs."""
 
+import csv
 import json
 import subprocess
 import sys
@@ -148,11 +149,14 @@ def test_plot_command_writes_png_and_pdf(tmp_path, capsys):
 def test_converge_and_sweep_commands(tmp_path, capsys):
     out = tmp_path / "conv"
     rc = main(["converge", "heavy_top", "--param", "integrator.dt", "--values", "0.02", "0.01", "0.005", "0.0025",
-               "--set", "t_end=1", "--out", str(out), "--serial"])
+               "--set", "t_end=0.2", "--out", str(out), "--serial"])
     text = capsys.readouterr().out
     assert rc == 0 and (out / "study.csv").exists() and (out / "convergence.png").exists()
-    rate = float(text.split("fitted rate:")[1].split()[0])
-    assert abs(rate - 4.0) < 0.4  # RKMK4 (measured 4.04 against the finest run)
+    # the command prints the rate of its own table; that RKMK4's rate is 4 on this study is
+    # checked once, in tests/test_studies.py
+    rows = list(csv.DictReader((out / "study.csv").open()))
+    assert len(rows) == 4 and all(r["status"] == "ok" for r in rows)
+    assert np.isfinite(float(text.split("fitted rate:")[1].split()[0]))
     out2 = tmp_path / "sweep"
     rc = main(["sweep", "heavy_top", "--grid", "integrator.method=rkmk3,rkmk4", "integrator.dt=0.02,0.01",
                "--set", "t_end=0.2", "--out", str(out2), "--serial"])
