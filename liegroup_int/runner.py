@@ -107,8 +107,13 @@ class Checkpointer:
         self.last_wall = time.perf_counter()
         self.stop_requested = False
         self.t_saved: float | None = None
+        #: called before each checkpoint (buffered writers flush, so that their files hold
+        #: every output up to the checkpoint a resume continues from)
+        self.flushers: list = []
 
     def save(self, t, y):
+        for flush in self.flushers:
+            flush()
         write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
                                                                                    "h_max": self.stats.h_max},
                          self.meta)
@@ -121,6 +126,19 @@ class Checkpointer:
             self.save(t, y)
         if self.stop_requested:
             raise Interrupted(f"interrupted at t={t:.6g}; checkpoint written", t, self.stats.steps)
+
+
+def _once_per_output(fn):
+    """``fn(t, y)`` evaluated once per output: repeated calls with the same ``t`` and state
+    object return the first value (the history and HDF5 writers both record it)."""
+    last = [None, None, None]
+
+    def call(t, y):
+        if last[0] != t or last[1] is not y:
+            last[0], last[1], last[2] = t, y, fn(t, y)
+        return last[2]
+
+    return call
 
 
 class EnergyGuard:
@@ -244,6 +262,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
             quantities[q] = balance.work
         elif q in sim.diagnostics:
             quantities[q] = sim.diagnostics[q]
+    # each quantity once per output, whichever writer asks first
+    quantities = {q: _once_per_output(fn) for q, fn in quantities.items()}
     writer = HistoryWriter(history, quantities, columns, append=resume is not None)
     observers = [writer]
     h5 = None
@@ -268,6 +288,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt,
             "energy0": e0}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
+    if h5 is not None:
+        ckpt.flushers.append(h5.flush)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
         observers.insert(1, EnergyGuard(writer, scene.output.blowup_factor, lambda: ckpt.stats))
     last = {"t": t0, "y": y0}  # the last recorded state, for the failure diagnosis

@@ -9,13 +9,17 @@ Layout of ``results.h5``::
     /snapshots/<name> (m, ...)  state arrays at output times (beams: c, v, w, R, K, K_s;
                                 rigid bodies: y)
 
-Every dataset is chunked and resizable along its first axis; the file is flushed after
-each output, so a killed run keeps everything up to its last output.
+Every dataset is chunked and resizable along its first axis. Outputs are buffered in memory
+and written in blocks: when ``flush_outputs`` outputs are pending, when the last write is
+older than ``flush_s`` seconds, at every checkpoint of the run and at the end. A killed run
+therefore keeps everything up to its last block: it loses at most the outputs of the last
+``flush_s`` seconds (2 s by default), and never more than ``flush_outputs`` (256) of them.
 """
 
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -38,10 +42,15 @@ class Hdf5Writer:
         Metadata stored on the root group (JSON-encoded when not a scalar or string).
     append : bool
         Continue an existing file (resumed runs) instead of creating it.
+    flush_outputs : int
+        Largest number of buffered outputs.
+    flush_s : float
+        Longest time [s] an output stays in the buffer (checked at each output).
     """
 
     def __init__(self, path: Path, quantities: Mapping[str, Callable], columns: Mapping[str, list],
-                 snapshot: Callable[[object], dict], attrs: Mapping, append: bool = False):
+                 snapshot: Callable[[object], dict], attrs: Mapping, append: bool = False,
+                 flush_outputs: int = 256, flush_s: float = 2.0):
         import h5py
 
         self.path = Path(path)
@@ -56,30 +65,52 @@ class Hdf5Writer:
             self.f.create_group("history")
             self.f.create_group("snapshots")
         self.f.flush()
+        self.flush_outputs, self.flush_s = int(flush_outputs), float(flush_s)
+        self._pending: dict[tuple[str, str], list] = {}
+        self._n_pending = 0
+        self._last_write = time.perf_counter()
 
-    def _append(self, group: str, name: str, value: np.ndarray) -> None:
+    def _buffer(self, group: str, name: str, value) -> None:
+        self._pending.setdefault((group, name), []).append(np.array(value, dtype=float))
+
+    def _write(self, group: str, name: str, values: list) -> None:
         g = self.f[group]
-        value = np.asarray(value, dtype=float)
+        block = np.stack(values)
+        shape = block.shape[1:]
         if name not in g:
-            g.create_dataset(name, shape=(0,) + value.shape, maxshape=(None,) + value.shape, dtype="f8",
-                             chunks=(max(1, min(256, 2**20 // max(1, value.size * 8))),) + value.shape)
+            size = int(np.prod(shape)) if shape else 1
+            g.create_dataset(name, shape=(0,) + shape, maxshape=(None,) + shape, dtype="f8",
+                             chunks=(max(1, min(256, 2**20 // max(1, size * 8))),) + shape)
         d = g[name]
-        d.resize(d.shape[0] + 1, axis=0)
-        d[-1] = value
+        n = d.shape[0]
+        d.resize(n + block.shape[0], axis=0)
+        d[n:] = block
+
+    def flush(self) -> None:
+        """Write the buffered outputs and flush the file."""
+        if self._n_pending:
+            for (group, name), values in self._pending.items():
+                self._write(group, name, values)
+            self._pending, self._n_pending = {}, 0
+        self.f.flush()
+        self._last_write = time.perf_counter()
 
     def __call__(self, t: float, y) -> None:
-        self._append("history", "t", t)
+        self._buffer("history", "t", t)
         for name, fn in self.quantities.items():
             val = np.atleast_1d(np.asarray(fn(t, y), dtype=float))
             for col, x in zip(self.columns.get(name, [name]), val):
-                self._append("history", col, x)
-        self._append("snapshots", "t", t)
+                self._buffer("history", col, x)
+        self._buffer("snapshots", "t", t)
         for name, arr in self.snapshot(y).items():
-            self._append("snapshots", name, arr)
-        self.f.flush()
+            self._buffer("snapshots", name, arr)
+        self._n_pending += 1
+        if self._n_pending >= self.flush_outputs or time.perf_counter() - self._last_write > self.flush_s:
+            self.flush()
 
     def truncate_after(self, t: float) -> None:
         """Drop rows with time > ``t`` (a resumed run continues from its checkpoint)."""
+        self.flush()
         for group in ("history", "snapshots"):
             g = self.f[group]
             if "t" not in g:
@@ -90,6 +121,8 @@ class Hdf5Writer:
         self.f.flush()
 
     def close(self) -> None:
+        """Write what is buffered and close the file."""
+        self.flush()
         self.f.close()
 
 

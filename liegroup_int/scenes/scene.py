@@ -34,7 +34,7 @@ class OutputSpec:
     quantities: tuple[str, ...]
     hdf5: bool = True
     checkpoint_every: float = 60.0
-    paraview: bool = True
+    paraview: bool = False
     blowup_factor: float = 1e3
 
 
@@ -190,7 +190,8 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("output.blowup_factor", "float", 1e3,
             "stop when the recorded energy magnitude exceeds this factor times its largest earlier value (0: off)",
             "", non_negative),
-        Key("output.paraview", "bool", True, "beams: write a VTU file per output time and the index beam.pvd"),
+        Key("output.paraview", "bool", False, "beams: write a VTU file per output time and the index beam.pvd "
+            "(about 2 ms per output; on in the built-in scenes whose picture is the point)"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
         Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
         Key("guard.spectrum", "bool", True,

@@ -95,13 +95,16 @@ def test_killed_run_keeps_valid_outputs(tmp_path):
     p.send_signal(signal.SIGKILL)
     p.communicate(timeout=30)
     h = read_history(out / "history.csv")
-    r = read_results(out / "results.h5")  # readable after SIGKILL: flushed per output
+    r = read_results(out / "results.h5")  # readable after SIGKILL: written in whole blocks
     assert len(h["t"]) >= 10 and np.all(np.isfinite(h["energy"]))
-    n = len(r["history"]["t"])
-    # each output writes its CSV row, then its HDF5 row: a kill between the two leaves the
-    # HDF5 history at most one row behind the CSV, never ahead
-    assert len(h["t"]) - 1 <= n <= len(h["t"]) and r["snapshots"]["y"].shape == (n, 12)
-    np.testing.assert_array_equal(r["history"]["t"][: min(n, len(h["t"]))], h["t"][: min(n, len(h["t"]))])
+    n = len(r["history"].get("t", []))
+    # the CSV gets its row at every output; the HDF5 file is written in blocks (io/hdf5.py:
+    # at most 256 outputs or 2 s buffered), so after a kill it holds a prefix of the CSV's
+    # rows, never more, and loses at most one block
+    assert len(h["t"]) - 256 <= n <= len(h["t"])
+    if n:
+        assert r["snapshots"]["y"].shape == (n, 12)
+        np.testing.assert_array_equal(r["history"]["t"], h["t"][:n])
 
 
 def test_energy_guard_stops_an_exploding_energy(tmp_path):
