@@ -23,6 +23,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set integrator.dt=1e-4 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--no-plots", action="store_true", help="skip history.png and shapes.png (output.plots=false)")
     run.add_argument("--resume", type=Path, default=None, metavar="DIR",
                      help="continue the run stored in DIR from its checkpoint (with --set t_end=T to extend it)")
     val = sub.add_parser("validate", help="check a scene without running it")
@@ -210,6 +211,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "run":
             from .runner import RunError, resume_run, run_scene
 
+            if args.no_plots:
+                args.overrides.append("output.plots=false")
             try:
                 if args.resume is not None:
                     overrides = dict(parse_override(s) for s in args.overrides)

@@ -219,6 +219,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         keeps the rows written so far, ``summary.json`` records the failure.
     """
     out_dir = Path(out_dir)
+    clock0 = time.perf_counter()
     sim = KINDS[scene.kind].build(scene)
     spec = scene.integrator
     dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
@@ -307,13 +308,17 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     observers.append(ckpt)
     first = [resume is not None]
 
+    output_s = [0.0]  # time spent writing outputs, inside the integration loop
+
     def observer(t, y):
         if first[0]:  # a resumed run does not record its starting point again
             first[0] = False
             return
+        c = time.perf_counter()
         for obs in observers:
             obs(t, y)
         progress(t, y, stats)
+        output_s[0] += time.perf_counter() - c
 
     # progress at output times only: no per-step monitor, so compiled problems may run
     # the steps between two outputs in one call (the compiled engine, Problem.compiled_kernels)
@@ -330,6 +335,7 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     old_handlers = _install_signal_handlers(ckpt)
     t_reached, y_final, status, error = t0, y0, "ok", None
     start = time.perf_counter()
+    setup_s = start - clock0
     try:
         if dt is not None:
             t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (t0, t_out[-1]), y0, dt, observer, t_out,
@@ -369,7 +375,15 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
         summary["error"] = error
     if sim.snapshot is not None and hasattr(sim.snapshot, "shapes"):
         shapes = sim.snapshot.shapes()
-    summary["plots"] = write_plots(out_dir, scene, history, shapes)
+    loop_s = time.perf_counter() - start
+    c = time.perf_counter()
+    summary["plots"] = write_plots(out_dir, scene, history, shapes) if scene.output.plots else []
+    summary["timing"] = {
+        "setup_s": setup_s,  # scene, space, damping sizing, dt = "auto", guards, writers
+        "integrate_s": loop_s - output_s[0],  # steps (first call: numba compilation or cache load)
+        "output_s": output_s[0],  # history, HDF5, ParaView, checkpoints at output times
+        "plots_s": time.perf_counter() - c,
+    }
     write_json(out_dir / "summary.json", summary)
     if error is not None:
         raise RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are in {out_dir})")

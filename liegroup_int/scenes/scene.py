@@ -36,6 +36,7 @@ class OutputSpec:
     checkpoint_every: float = 60.0
     paraview: bool = False
     blowup_factor: float = 1e3
+    plots: bool = True
 
 
 @dataclass(frozen=True)
@@ -192,6 +193,7 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
             "", non_negative),
         Key("output.paraview", "bool", False, "beams: write a VTU file per output time and the index beam.pvd "
             "(about 2 ms per output; on in the built-in scenes whose picture is the point)"),
+        Key("output.plots", "bool", True, "draw history.png (and shapes.png) after the run (about 1 s; `--no-plots`)"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
         Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
         Key("guard.spectrum", "bool", True,
@@ -246,7 +248,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         t_end=v["t_end"],
         integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
         output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"],
-                          v["output.paraview"], v["output.blowup_factor"]),
+                          v["output.paraview"], v["output.blowup_factor"], v["output.plots"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
         guard=GuardSpec(v["guard.dt"], v["guard.spectrum"], v["guard.energy_balance"]),

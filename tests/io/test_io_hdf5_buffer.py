@@ -42,3 +42,18 @@ def test_paraview_only_when_asked(tmp_path):
     assert not (tmp_path / "off" / "paraview").exists() and not (tmp_path / "off" / "beam.pvd").exists()
     assert main(["run", "cantilever", "--out", str(tmp_path / "on"), *common, "--set", "output.paraview=true"]) == 0
     assert len(list((tmp_path / "on" / "paraview").glob("*.vtu"))) == 5  # t = 0 and 4 outputs
+
+
+def test_timing_breakdown_and_no_plots(tmp_path):
+    """summary.json splits the run's time; --no-plots draws nothing and costs nothing."""
+    import json
+
+    out = tmp_path / "run"
+    assert main(["run", "heavy_top", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.2"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    timing = s["timing"]
+    assert set(timing) == {"setup_s", "integrate_s", "output_s", "plots_s"}
+    assert all(v >= 0 for v in timing.values()) and s["plots"] == []
+    assert not (out / "history.png").exists()
+    # the loop's wall time is the integration plus the outputs written inside it
+    assert timing["integrate_s"] + timing["output_s"] >= 0.99 * s["wall_time_s"]
