@@ -30,8 +30,6 @@ Conventions
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
-from scipy.linalg import lapack
 
 from .bspline import as_parameters, band_widths, to_banded
 from .nurbs import NurbsCurve
@@ -49,6 +47,13 @@ __all__ = [
 #: Smallest admissible angle (rad) between the reference vector and the tangent.
 DEFAULT_MIN_ANGLE = np.deg2rad(1.0)
 
+
+
+def _linalg():
+    """``scipy.linalg``, imported on first use (the CLI's listing commands need no LAPACK)."""
+    import scipy.linalg
+
+    return scipy.linalg
 
 def vee(s: np.ndarray) -> np.ndarray:
     """Axial vector of (the skew part of) 3x3 matrices.
@@ -369,12 +374,13 @@ class CollocationSpace:
             )
 
     def _factorize(self) -> None:
+        linalg = _linalg()
         if self.solver == "lu":
-            self._lu = scipy.linalg.lu_factor(self.N0)
+            self._lu = linalg.lu_factor(self.N0)
             return
         lower, upper = self.bandwidths
         ab = to_banded(self.N0, lower, upper, extra_rows=lower)
-        lu, piv, info = lapack.dgbtrf(ab, lower, upper)
+        lu, piv, info = linalg.lapack.dgbtrf(ab, lower, upper)
         if info != 0:
             raise ValueError(f"collocation matrix is singular (dgbtrf info = {info})")
         self._lu = (lu, piv)
@@ -398,10 +404,10 @@ class CollocationSpace:
                 f"rhs must have shape ({self.n_ctrl},) or ({self.n_ctrl}, m), got {b.shape}"
             )
         if self.solver == "lu":
-            return scipy.linalg.lu_solve(self._lu, b)
+            return _linalg().lu_solve(self._lu, b)
         lower, upper = self.bandwidths
         b2 = b.reshape(self.n_ctrl, -1)
-        x, info = lapack.dgbtrs(self._lu[0], lower, upper, b2, self._lu[1])
+        x, info = _linalg().lapack.dgbtrs(self._lu[0], lower, upper, b2, self._lu[1])
         if info != 0:  # pragma: no cover - argument error
             raise ValueError(f"dgbtrs failed (info = {info})")
         return x.reshape(b.shape)

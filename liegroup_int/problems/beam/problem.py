@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from ...groups.so3 import SO3, angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
@@ -82,6 +81,8 @@ def quadrature_weights(space: CollocationSpace, n_gauss: int = 12) -> np.ndarray
     basis = space.curve.basis(u, 0)[0]
     jac = np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
     bj = basis.T @ (wu * jac)
+    import scipy.linalg
+
     return scipy.linalg.solve(space.N0.T, bj)
 
 
