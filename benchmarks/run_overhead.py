@@ -1,0 +1,70 @@
+"""Where a run's time goes: start-up, set-up, integration, outputs and plots.
+
+    python benchmarks/run_overhead.py
+
+Runs the CLI as a user does (``python -m liegroup_int ...`` in a subprocess, numba cache
+warm: one untimed run first) and reports, per case, the process CPU time of the child
+(``resource.getrusage(RUSAGE_CHILDREN)``) and the split that ``summary.json`` records
+(``timing``: setup, integrate, output, plots), with the cost per output row.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+CASES = [
+    ("liegroup-int scenes", ["scenes"], None),
+    ("README main job: run cantilever", ["run", "cantilever", "--quiet"], "run"),
+    ("  the same, --no-plots", ["run", "cantilever", "--quiet", "--no-plots"], "run"),
+    ("  the same, --no-plots, output.hdf5=false", ["run", "cantilever", "--quiet", "--no-plots", "--set",
+                                                    "output.hdf5=false"], "run"),
+    ("  the same, --no-plots, output.paraview=true", ["run", "cantilever", "--quiet", "--no-plots", "--set",
+                                                       "output.paraview=true"], "run"),
+    ("heavy_top, 10 steps", ["run", "heavy_top", "--quiet", "--set", "t_end=0.1", "--set", "integrator.dt=0.01"],
+     "run"),
+    ("heavy_top, 10 steps, --no-plots", ["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.1",
+                                         "--set", "integrator.dt=0.01"], "run"),
+]
+
+
+def child_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run(args: list[str], out: Path | None) -> tuple[float, dict | None]:
+    full = [sys.executable, "-m", "liegroup_int", *args] + (["--out", str(out)] if out is not None else [])
+    c0 = child_cpu()
+    subprocess.run(full, check=True, capture_output=True, text=True)
+    cpu = child_cpu() - c0
+    summary = json.loads((out / "summary.json").read_text()) if out is not None else None
+    return cpu, summary
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        run(["run", "cantilever", "--quiet", "--no-plots", "--set", "t_end=1e-4", "--set", "output.every=5e-5"],
+            tmp / "warm")  # numba cache
+        run(["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.01"], tmp / "warm2")
+        print("| case | process CPU s | setup s | integrate s | output s | output ms/row | plots s | "
+              "CPU / integrate |")
+        print("|---|---|---|---|---|---|---|---|")
+        for k, (label, args, kind) in enumerate(CASES):
+            cpu, s = run(args, tmp / f"r{k}" if kind else None)
+            if s is None:
+                print(f"| {label} | {cpu:.2f} | | | | | | |")
+                continue
+            t = s["timing"]
+            per = 1e3 * t["output_s"] / max(1, s["history_rows"])
+            print(f"| {label} | {cpu:.2f} | {t['setup_s']:.2f} | {t['integrate_s']:.2f} | {t['output_s']:.3f} | "
+                  f"{per:.2f} | {t['plots_s']:.2f} | {cpu / t['integrate_s']:.1f}x |")
+
+
+if __name__ == "__main__":
+    main()
