@@ -18,7 +18,7 @@ import pytest
 from liegroup_int.integrators import (METHODS, BlowUpError, IntegrationError, Problem, Stats, StepSizeError,
                                       integrate_fixed, resolve_method)
 from liegroup_int.problems.beam import BeamProblem
-from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.integrators.engine import compiled_stepper
 from liegroup_int.problems.beam.kernels_numba import profile_row, profile_value
 from liegroup_int.problems.beam.model import EndLoad, Loads, Profile
 from liegroup_int.scenes import load_scene
@@ -90,20 +90,6 @@ def test_the_stepper_exists_only_where_it_should(scene):
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy",
                         formulation=pb.formulation)
     assert compiled_stepper(np_pb, TAB) is None
-
-
-@pytest.fixture
-def advance_calls(monkeypatch):
-    """Counts the calls of the fused loop."""
-    calls = []
-    original = CompiledStepper.advance
-
-    def counted(self, *args):
-        calls.append(args[4])  # n_steps
-        return original(self, *args)
-
-    monkeypatch.setattr(CompiledStepper, "advance", counted)
-    return calls
 
 
 @pytest.mark.parametrize("t0", [0.0, 0.1])  # 0.1 s: every time profile of the scenes is on

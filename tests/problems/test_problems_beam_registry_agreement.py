@@ -33,6 +33,8 @@ from liegroup_int.problems.beam import BeamProblem
 from liegroup_int.scenes import KINDS, builtin_names, builtin_path, load_scene
 from liegroup_int.scenes.schema import read_toml
 
+from test_problems_beam_backends import _respect_supports
+
 BEAM_SCENES = [n for n in builtin_names() if read_toml(builtin_path(n)).get("problem") == "beam"]
 FIELDS = ("c", "v", "w", "R", "K", "K_s")
 RK4 = resolve_method("rkmk4")
@@ -59,15 +61,6 @@ def _build(name, overrides=None):
                       kelvin_voigt=nb.tau, formulation=nb.formulation)
     assert nb.backend == "numba" and npb.backend == "numpy" and npb.tau == nb.tau
     return sc, nb, npb, sim.info
-
-
-def _respect_supports(pb, u):
-    for e in pb.ends:
-        if e.fix_position:
-            u[[0, 2], e.index] = 0.0
-        if e.fix_rotation:
-            u[[1, 3], e.index] = 0.0
-    return u
 
 
 def _random_increment(pb, seed=0):

@@ -71,20 +71,6 @@ def _run(body, y0, t_span, dt, fused, tab=TAB, t_out=None, max_angle=1.0):
         return exc, stats, rec
 
 
-@pytest.fixture
-def advance_calls(monkeypatch):
-    """Counts the calls of the compiled engine's fixed-step loop."""
-    calls = []
-    original = CompiledStepper.advance
-
-    def counted(self, *args):
-        calls.append(args[4])  # n_steps
-        return original(self, *args)
-
-    monkeypatch.setattr(CompiledStepper, "advance", counted)
-    return calls
-
-
 def _same_stats(a, b, tab=None, calls=1):
     """Equal counters. Both loops reuse the last stage of an FSAL pair as the next first one
     (one evaluation less per step); the generic loop keeps it across output times
