@@ -71,20 +71,25 @@ class Progress:
 
     def __init__(self, t0: float, t_end: float, enabled: bool):
         self.bar, self._last = None, 0.0
+        self._start, self._steps0 = time.perf_counter(), None
         if enabled:
             from tqdm import tqdm
 
+            # tqdm writes ", " before the postfix itself
             self.bar = tqdm(total=t_end, initial=t0, unit="s(sim)", file=sys.stderr, dynamic_ncols=True,
-                            bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s [{elapsed}<{remaining}, {postfix}]")
+                            bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s [{elapsed}<{remaining}{postfix}]")
 
     def __call__(self, t, y, stats):
         if self.bar is None:
             return
         now = time.perf_counter()
+        if self._steps0 is None:  # steps of earlier segments (resumed runs) are not this run's rate
+            self._steps0 = stats.steps
         if now - self._last >= 0.25:
             self._last = now
             self.bar.n = t
-            self.bar.set_postfix_str(f"{stats.steps} steps", refresh=True)
+            rate = (stats.steps - self._steps0) / max(now - self._start, 1e-9)
+            self.bar.set_postfix_str(f"{stats.steps} steps, {rate:.3g} steps/s", refresh=True)
 
     def close(self, t):
         if self.bar is not None:

@@ -57,3 +57,18 @@ def test_timing_breakdown_and_no_plots(tmp_path):
     assert not (out / "history.png").exists()
     # the loop's wall time is the integration plus the outputs written inside it
     assert timing["integrate_s"] + timing["output_s"] >= 0.99 * s["wall_time_s"]
+
+
+def test_progress_line_shows_steps_and_rate(capsys):
+    """One comma between the times and the postfix (tqdm adds it), and the steps per second
+    of this run."""
+    from liegroup_int.integrators import Stats
+    from liegroup_int.runner import Progress
+
+    p = Progress(0.0, 1.0, enabled=True)
+    p(0.1, None, Stats(steps=0))
+    p._last = 0.0  # let the next update through
+    p(0.5, None, Stats(steps=1000))
+    p.close(1.0)
+    err = capsys.readouterr().err
+    assert ", ," not in err and "1000 steps, " in err and "steps/s]" in err
