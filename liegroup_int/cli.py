@@ -18,7 +18,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"%(prog)s {__import__('liegroup_int').__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a scene (a TOML path or a built-in name)")
-    run.add_argument("scene", help="scene file or built-in scene name (see `liegroup-int scenes`)")
+    run.add_argument("scene", nargs="?", default=None,
+                     help="scene file or built-in scene name (see `liegroup-int scenes`); optional with --resume")
     run.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE)")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key, e.g. --set integrator.dt=1e-4 (repeatable)")
@@ -213,10 +214,12 @@ def main(argv: list[str] | None = None) -> int:
 
             if args.no_plots:
                 args.overrides.append("output.plots=false")
+            if args.resume is None and args.scene is None:
+                raise SceneError("run: give a SCENE (or --resume DIR)")
             try:
                 if args.resume is not None:
                     overrides = dict(parse_override(s) for s in args.overrides)
-                    res = resume_run(args.resume, overrides, quiet=args.quiet)
+                    res = resume_run(args.resume, overrides, quiet=args.quiet, scene=args.scene)
                     out = args.resume
                     scene_name = res.summary["scene"]
                 else:
@@ -227,6 +230,10 @@ def main(argv: list[str] | None = None) -> int:
             except RunError as exc:
                 print(f"error: {exc}", file=sys.stderr)
                 return 130 if "interrupted" in str(exc) else 3
+            except OSError as exc:  # an output directory or file that cannot be written
+                where = exc.filename if exc.filename else (args.resume or args.out)
+                print(f"error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
+                return 2
             s = res.summary
             print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
             return 0

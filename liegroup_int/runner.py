@@ -66,6 +66,9 @@ def output_times(t_end: float, every: float) -> np.ndarray:
     return t
 
 
+_MISSING = object()
+
+
 class Progress:
     """Progress bar on stderr (tqdm), updated at most 4 times per second."""
 
@@ -395,16 +398,32 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     return RunResult(out_dir, summary, history)
 
 
-def resume_run(out_dir: Path, overrides: dict, quiet: bool = True) -> RunResult:
-    """Continue the run stored in ``out_dir`` from its checkpoint (``--resume DIR``)."""
+#: Scene keys a resumed run may change: the span and what is written, not the model, the
+#: discretization or the method (the checkpoint holds a state of those).
+RESUME_KEYS = ("t_end", "output.plots", "output.paraview", "output.checkpoint_every", "output.blowup_factor",
+               "guard.energy_balance")
+
+
+def resume_run(out_dir: Path, overrides: dict, quiet: bool = True, scene: str | None = None) -> RunResult:
+    """Continue the run stored in ``out_dir`` from its checkpoint (``--resume DIR``).
+
+    ``overrides`` may change only :data:`RESUME_KEYS`; any other key that differs from the
+    checkpoint's scene, and a ``scene`` other than the checkpoint's, raise
+    :class:`SceneError` before anything is written."""
     path = Path(out_dir) / "checkpoint.npz"
     if not path.exists():
         raise SceneError(f"{out_dir}: no checkpoint.npz to resume from")
     ckpt = read_checkpoint(path)
     meta = ckpt["meta"]
     keys = dict(meta["scene_keys"])
-    keys.update(overrides)
     source = meta["source"]
     src = source.removeprefix("builtin:")
+    if scene is not None and str(scene) not in (src, source):
+        raise SceneError(f"{out_dir}: holds a run of {source}, not {scene}; give no SCENE with --resume")
+    for k, v in overrides.items():
+        if k not in RESUME_KEYS and keys.get(k, _MISSING) != v:
+            raise SceneError(f"{out_dir}: key '{k}' cannot change on resume (the checkpoint holds a state of "
+                             f"{source} as it was run); only {', '.join(RESUME_KEYS)} can; start a new run")
+    keys.update(overrides)
     scene = load_scene(src, keys)
     return run_scene(scene, out_dir, quiet=quiet, resume=ckpt)

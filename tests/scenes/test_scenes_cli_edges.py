@@ -1,0 +1,41 @@
+"""First-hour edges of the CLI: resume rules, the SCENE of a resume, unwritable outputs."""
+
+import json
+
+from liegroup_int.cli import main
+
+
+def _pendulum(tmp_path):
+    out = tmp_path / "pend"
+    assert main(["run", "pendulum", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.02"]) == 0
+    return out
+
+
+def test_resume_refuses_a_changed_discretization_and_leaves_the_run_alone(tmp_path, capsys):
+    out = _pendulum(tmp_path)
+    before = (out / "summary.json").read_text()
+    rc = main(["run", "--resume", str(out), "--set", "t_end=0.04", "--set", "space.n_ctrl=61"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "key 'space.n_ctrl' cannot change on resume" in err and err.count("\n") == 1
+    assert (out / "summary.json").read_text() == before  # untouched
+    # an unchanged value and the safe keys are accepted
+    assert main(["run", "--resume", str(out), "--quiet", "--set", "t_end=0.04", "--set", "space.n_ctrl=31",
+                 "--no-plots"]) == 0
+    assert json.loads((out / "summary.json").read_text())["t_reached"] == 0.04
+
+
+def test_resume_scene_is_optional_and_must_match(tmp_path, capsys):
+    out = _pendulum(tmp_path)
+    rc = main(["run", "cantilever", "--resume", str(out), "--set", "t_end=0.04"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "holds a run of builtin:pendulum, not cantilever" in err
+    assert main(["run", "pendulum", "--resume", str(out), "--quiet", "--set", "t_end=0.03"]) == 0
+    assert main(["run"]) == 2 and "give a SCENE" in capsys.readouterr().err
+
+
+def test_an_unwritable_out_is_one_line(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    rc = main(["run", "heavy_top", "--quiet", "--out", str(blocker / "run")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("error: cannot write") and err.count("\n") == 1 and "Traceback" not in err
