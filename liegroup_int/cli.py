@@ -25,6 +25,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="override a scene key, e.g. --set integrator.dt=1e-4 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--no-plots", action="store_true", help="skip history.png and shapes.png (output.plots=false)")
+    run.add_argument("--overwrite", action="store_true", help="replace the run already in the output directory")
     run.add_argument("--resume", type=Path, default=None, metavar="DIR",
                      help="continue the run stored in DIR from its checkpoint (with --set t_end=T to extend it)")
     val = sub.add_parser("validate", help="check a scene without running it")
@@ -67,6 +68,19 @@ def _parser() -> argparse.ArgumentParser:
     sc = sub.add_parser("scenes", help="list the built-in scenes")
     sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
     return p
+
+
+def _claim(out: Path, overwrite: bool) -> None:
+    """Refuse an output directory that holds another run, or clear it with ``--overwrite``
+    (stale VTU files and plots must not sit next to the new ones)."""
+    if not (out / "summary.json").exists() and not (out / "history.csv").exists():
+        return
+    if not overwrite:
+        raise SceneError(f"{out}: holds a run already; give --overwrite to replace it, --out another directory, "
+                         f"or --resume {out} to continue it")
+    import shutil
+
+    shutil.rmtree(out)
 
 
 def _load(args):
@@ -225,6 +239,7 @@ def main(argv: list[str] | None = None) -> int:
                 else:
                     scene = _load(args)
                     out = args.out if args.out is not None else Path("runs") / scene.name
+                    _claim(out, args.overwrite)
                     scene_name = scene.name
                     res = run_scene(scene, out, quiet=args.quiet)
             except RunError as exc:

@@ -248,6 +248,12 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
     # step or a spurious growing mode at rest
     guard_facts, guard_warnings = start_checks(scene, sim, tab, dt, t0, y0)
+    if dt is not None and scene.output.every is not None and scene.output.every < dt * (1 - 1e-9):
+        n_out = int(round((scene.t_end - t0) / every))
+        guard_warnings = list(guard_warnings) + [
+            f"{scene.source}: output.every = {scene.output.every:g} s is below the step dt = {dt:g} s: one "
+            f"output per step, {n_out} outputs"
+            + (f" (ParaView: {n_out} VTU files)" if scene.output.paraview and sim.frames is not None else "")]
     for w in guard_warnings:
         print(f"warning: {w}", file=sys.stderr)
     out_dir.mkdir(parents=True, exist_ok=True)

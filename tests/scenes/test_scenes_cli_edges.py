@@ -39,3 +39,23 @@ def test_an_unwritable_out_is_one_line(tmp_path, capsys):
     rc = main(["run", "heavy_top", "--quiet", "--out", str(blocker / "run")])
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("error: cannot write") and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_an_existing_run_is_not_mixed_with_a_new_one(tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["run", "heavy_top", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.1"]
+    assert main(args) == 0
+    (out / "stale.vtu").write_text("old")
+    assert main(args) == 2 and "holds a run already; give --overwrite" in capsys.readouterr().err
+    assert (out / "stale.vtu").exists()  # refused: untouched
+    assert main(args + ["--overwrite"]) == 0
+    assert not (out / "stale.vtu").exists() and (out / "summary.json").exists()
+
+
+def test_outputs_finer_than_the_step_are_announced(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", "heavy_top", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.05",
+                 "--set", "integrator.dt=0.01", "--set", "output.every=0.001"]) == 0
+    err = capsys.readouterr().err
+    assert "output.every = 0.001 s is below the step dt = 0.01 s: one output per step, 5 outputs" in err
+    assert json.loads((out / "summary.json").read_text())["history_rows"] == 6  # t = 0 and 5 steps
