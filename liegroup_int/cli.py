@@ -104,9 +104,12 @@ def _study(args) -> int:
     except ImportError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    table = None
+    table, no_table = None, None
     if args.command == "converge":
-        table = studies.convergence_table(rows, args.param, quantity=args.quantity)
+        try:
+            table = studies.convergence_table(rows, args.param, quantity=args.quantity)
+        except ValueError as exc:  # e.g. every run failed: the rows are still written
+            no_table = str(exc)
     studies.write_study(out, rows, table)
     failed = [r for r in rows if r["status"] != "ok"]
     for r in rows:
@@ -116,11 +119,16 @@ def _study(args) -> int:
     if table is not None:
         for e in table:
             if e["error"] is not None:
-                print(f"  {args.param} = {e['value']!r}: error {e['error']:.3e} (against run {e['reference_run']})")
+                flag = "  (within 100x of round-off: not fitted)" if e.get("round_off") else ""
+                print(f"  {args.param} = {e['value']!r}: error {e['error']:.3e} (against run {e['reference_run']})"
+                      f"{flag}")
         try:
             print(f"fitted rate: {studies.table_rate(table):.3f}")
         except ValueError as exc:
             print(f"no rate fitted: {exc}")
+    if no_table is not None:
+        first = next((r.get("error") for r in failed if r.get("error")), None)
+        print(f"error: no convergence table: {no_table}" + (f" (run 0: {first})" if first else ""), file=sys.stderr)
     print(f"-> {out}")
     return 3 if failed else 0
 

@@ -423,12 +423,26 @@ def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapp
         err = None
         if row.get("status") == "ok":
             err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
+        rel = None if err is None or scale == 0.0 else err / scale
         table.append({"run": row.get("run"), "param": param, "value": _param_value(row, param), "quantity": quantity,
-                      "status": row.get("status"), "error": err,
-                      "rel_error": None if err is None or scale == 0.0 else err / scale,
+                      "status": row.get("status"), "error": err, "rel_error": rel,
+                      "round_off": rel is not None and rel <= round_off_floor(row.get("steps"), ref.get("steps")),
                       "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"),
                       "rhs_evals": row.get("rhs_evals"), "reference_run": ref.get("run")})
     return table
+
+
+#: A relative error within this factor of the accumulated rounding of a run is not a
+#: discretization error (issue: a rate fitted through such points means nothing).
+ROUND_OFF_FACTOR = 100.0
+
+
+def round_off_floor(steps, ref_steps) -> float:
+    """Relative error below which a run's difference from the reference may be rounding:
+    ``ROUND_OFF_FACTOR * eps * sqrt(steps + ref_steps)`` (random-walk accumulation of one
+    rounding per step in both runs)."""
+    n = float((steps or 0) + (ref_steps or 0))
+    return ROUND_OFF_FACTOR * float(np.finfo(float).eps) * math.sqrt(max(n, 1.0))
 
 
 def fit_rate(xs: Sequence[float], errs: Sequence[float]) -> float:
@@ -468,9 +482,15 @@ def table_rate(table: Sequence[Mapping]) -> float:
     Raises
     ------
     ValueError
-        Fewer than 3 such entries.
+        Fewer than 3 such entries; entries flagged ``round_off`` (:func:`round_off_floor`)
+        are not used, and when they leave fewer than 3 the message says so.
     """
-    used = [t for t in table if t.get("error") is not None and t["error"] > 0]
+    used = [t for t in table if t.get("error") is not None and t["error"] > 0 and not t.get("round_off")]
+    flagged = [t for t in table if t.get("round_off")]
+    if len(used) < 3 and flagged:
+        raise ValueError(f"{len(flagged)} of {len(table)} errors are within {ROUND_OFF_FACTOR:g}x of the round-off "
+                         f"floor (relative {min(t['rel_error'] for t in flagged):.1e}); use coarser values or a "
+                         f"longer span")
     return fit_rate([t["value"] for t in used], [t["error"] for t in used])
 
 

@@ -59,3 +59,24 @@ def test_outputs_finer_than_the_step_are_announced(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "output.every = 0.001 s is below the step dt = 0.01 s: one output per step, 5 outputs" in err
     assert json.loads((out / "summary.json").read_text())["history_rows"] == 6  # t = 0 and 5 steps
+
+
+def test_converge_refuses_a_rate_through_round_off(tmp_path, capsys):
+    """The old user-guide example: time errors of 1e-14 on the pendulum are rounding; the
+    command flags them and fits no rate."""
+    out = tmp_path / "conv"
+    rc = main(["converge", "pendulum", "--param", "integrator.dt", "--values", "1e-5", "5e-6", "2.5e-6", "1.25e-6",
+               "--set", "t_end=0.01", "--serial", "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0 and text.count("within 100x of round-off: not fitted") == 3
+    assert "no rate fitted: 3 of 3 errors are within 100x of the round-off floor" in text
+    assert "fitted rate:" not in text
+
+
+def test_converge_with_every_run_refused_is_one_line(tmp_path, capsys):
+    out = tmp_path / "conv"
+    rc = main(["converge", "pendulum", "--param", "integrator.dt", "--values", "6e-5", "3e-5", "--set", "t_end=0.01",
+               "--set", "integrator.method=rkmk2", "--serial", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 3 and "error: no convergence table: no successful run" in err and "Traceback" not in err
+    assert (out / "study.csv").exists()
