@@ -21,7 +21,12 @@ def builtin_path(name: str) -> Path:
     """Path of a built-in scene; :class:`SceneError` naming the valid ones if unknown."""
     p = _builtin_dir() / f"{name}.toml"
     if not p.is_file():
-        raise SceneError(f"{name}: not a scene file and not a built-in scene (built-ins: {', '.join(builtin_names())})")
+        import difflib
+
+        close = difflib.get_close_matches(str(name), builtin_names(), n=1, cutoff=0.6)
+        hint = f"did you mean '{close[0]}'? " if close else ""
+        raise SceneError(f"{name}: not a scene file and not a built-in scene ({hint}built-ins: "
+                         f"{', '.join(builtin_names())})")
     return p
 
 

@@ -185,8 +185,12 @@ def resolve_keys(keys: Mapping[str, Key], given: Mapping[str, Any], where: str) 
     """Apply defaults, reject unknown and missing keys, coerce every value."""
     unknown = sorted(set(given) - set(keys))
     if unknown:
+        import difflib
+
+        close = difflib.get_close_matches(unknown[0], list(keys), n=1, cutoff=0.75)
         near = [k for k in keys if k.split(".")[0] == unknown[0].split(".")[0]]
-        hint = f" (keys of this section: {', '.join(sorted(near))})" if near else ""
+        hint = (f" (did you mean '{close[0]}'?)" if close
+                else f" (keys of this section: {', '.join(sorted(near))})" if near else "")
         raise SceneError(f"{where}: unknown key '{unknown[0]}'{hint}")
     out = {}
     for name, key in keys.items():

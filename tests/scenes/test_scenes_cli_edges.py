@@ -80,3 +80,10 @@ def test_converge_with_every_run_refused_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 3 and "error: no convergence table: no successful run" in err and "Traceback" not in err
     assert (out / "study.csv").exists()
+
+
+def test_did_you_mean(capsys):
+    assert main(["run", "cantilevr"]) == 2
+    assert "did you mean 'cantilever'?" in capsys.readouterr().err
+    assert main(["run", "heavy_top", "--set", "integrator.mthod=rkmk4"]) == 2
+    assert "unknown key 'integrator.mthod' (did you mean 'integrator.method'?)" in capsys.readouterr().err
