@@ -37,12 +37,13 @@ class HistoryWriter:
             header.extend(self.columns.get(name, [name]))
         self.header = header
         exists = append and self.path.exists()
+        #: rows in the file: those already there (a resumed run) and the ones written here
+        self.rows = max(0, sum(1 for _ in open(self.path)) - 1) if exists else 0
         self._fh = open(self.path, "a" if exists else "w", newline="")
         self._csv = csv.writer(self._fh)
         if not exists:
             self._csv.writerow(header)
             self._fh.flush()
-        self.rows = 0
         self.last: dict[str, float] = {}
 
     def __call__(self, t: float, y) -> None:

@@ -21,7 +21,11 @@ def test_resume_refuses_a_changed_discretization_and_leaves_the_run_alone(tmp_pa
     # an unchanged value and the safe keys are accepted
     assert main(["run", "--resume", str(out), "--quiet", "--set", "t_end=0.04", "--set", "space.n_ctrl=31",
                  "--no-plots"]) == 0
-    assert json.loads((out / "summary.json").read_text())["t_reached"] == 0.04
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["t_reached"] == 0.04
+    # history_rows counts the whole file, like the cumulative steps
+    rows = len((out / "history.csv").read_text().strip().splitlines()) - 1
+    assert summary["history_rows"] == rows == 9  # t = 0 and every 0.005 s to 0.04
 
 
 def test_resume_scene_is_optional_and_must_match(tmp_path, capsys):
