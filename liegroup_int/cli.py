@@ -104,6 +104,12 @@ def _study(args) -> int:
     except ImportError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except studies.StudyInterrupted as exc:
+        if exc.rows:
+            studies.write_study(out, exc.rows)
+        print(f"error: {exc}; the finished runs are in {out}/study.csv; the same command continues the study",
+              file=sys.stderr)
+        return 130
     table, no_table = None, None
     if args.command == "converge":
         try:

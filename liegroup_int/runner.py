@@ -33,7 +33,11 @@ from .scenes import KINDS, Scene, SceneError, load_scene
 
 
 class RunError(RuntimeError):
-    """A run stopped early; files written so far stay valid. One-line message."""
+    """A run stopped early; files written so far stay valid. One-line message.
+
+    ``interrupted`` is true when a signal (SIGINT/SIGTERM) stopped it."""
+
+    interrupted: bool = False
 
 
 class Interrupted(IntegrationError):
@@ -400,7 +404,10 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
     }
     write_json(out_dir / "summary.json", summary)
     if error is not None:
-        raise RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are in {out_dir})")
+        exc = RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are "
+                       f"in {out_dir})")
+        exc.interrupted = status == "interrupted"
+        raise exc
     return RunResult(out_dir, summary, history)
 
 

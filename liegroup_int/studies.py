@@ -27,6 +27,7 @@ import itertools
 import json
 import logging
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -234,21 +235,65 @@ def run_task(task: StudyTask) -> dict:
         t_reached, final (the summary's final fields, e.g. tip (3,) or R (3, 3) and
         omega_body (3,); None if failed), error (one line or None), run_dir``.
     """
+    done = _finished_row(task)
+    if done is not None:  # a rerun of an interrupted study keeps the runs it finished
+        return done
+    if Path(task.run_dir).exists():  # an unfinished run: start it again from nothing
+        shutil.rmtree(task.run_dir)
     try:
         scene = build_scene(task.given, task.source, task.name)
         res = run_scene(scene, Path(task.run_dir), quiet=True)
-    except (RunError, SceneError) as exc:
+    except RunError as exc:
+        if exc.interrupted:
+            raise KeyboardInterrupt from None
         return _failed_row(task, exc)
-    s = res.summary
+    except SceneError as exc:
+        return _failed_row(task, exc)
+    return _row(task, res.summary)
+
+
+def _row(task: StudyTask, s: Mapping) -> dict:
     return _plain({"run": task.index, "overrides": task.overrides, "status": s["status"], "steps": s.get("steps"),
                    "rhs_evals": s.get("rhs_evals"), "wall_time_s": s.get("wall_time_s"),
                    "t_reached": s.get("t_reached"), "final": s.get("final"), "error": None,
                    "run_dir": task.run_dir})
 
 
+def _finished_row(task: StudyTask) -> dict | None:
+    """The row of a run already finished in ``task.run_dir`` with the same scene keys, or
+    ``None``."""
+    path = Path(task.run_dir) / "summary.json"
+    if not path.exists():
+        return None
+    try:
+        s = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    same = json.dumps(_plain(s.get("scene_keys")), sort_keys=True) == json.dumps(_plain(task.given), sort_keys=True)
+    return _row(task, s) if s.get("status") == "ok" and same else None
+
+
+class StudyInterrupted(Exception):
+    """A signal stopped a study; ``rows`` holds the runs finished before it (grid order)."""
+
+    def __init__(self, rows: list[dict], total: int):
+        super().__init__(f"interrupted after {len(rows)} of {total} runs")
+        self.rows, self.total = rows, total
+
+
 def _gather(client, tasks: list[StudyTask]) -> list[dict]:
+    from dask.distributed import as_completed
+
     futures = client.map(run_task, tasks, pure=False)
-    return client.gather(futures)
+    done: dict[int, dict] = {}
+    try:
+        for fut in as_completed(futures):
+            row = fut.result()
+            done[row["run"]] = row
+    except KeyboardInterrupt:
+        client.cancel(futures)
+        raise StudyInterrupted([done[i] for i in sorted(done)], len(tasks)) from None
+    return [done[t.index] for t in tasks]
 
 
 def _run_dask(tasks: list[StudyTask], scheduler: str | None, n_workers: int) -> list[dict]:
@@ -303,13 +348,22 @@ def run_study(scene: str | Path, base_overrides: Mapping[str, Any] | None, grid:
         An empty grid or ``n_workers < 1``.
     ImportError
         Dask is needed (``serial=False``) but not installed.
+    StudyInterrupted
+        SIGINT/SIGTERM during the study; it holds the rows finished so far. Running the same
+        study again keeps the runs whose directory holds a finished run with the same keys.
     """
     if not serial and scheduler is None and (int(n_workers) != n_workers or n_workers < 1):
         raise ValueError(f"n_workers: expected an integer >= 1, got {n_workers!r}")
     tasks = prepare_tasks(scene, base_overrides, grid, out_dir)
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     if serial:
-        return [run_task(t) for t in tasks]
+        rows = []
+        try:
+            for t in tasks:
+                rows.append(run_task(t))
+        except KeyboardInterrupt:
+            raise StudyInterrupted(rows, len(tasks)) from None
+        return rows
     return _run_dask(tasks, scheduler, int(n_workers))
 
 

@@ -1,5 +1,6 @@
 """First-hour edges of the CLI: resume rules, the SCENE of a resume, unwritable outputs."""
 
+import csv
 import json
 
 from liegroup_int.cli import main
@@ -91,3 +92,35 @@ def test_did_you_mean(capsys):
     assert "did you mean 'cantilever'?" in capsys.readouterr().err
     assert main(["run", "heavy_top", "--set", "integrator.mthod=rkmk4"]) == 2
     assert "unknown key 'integrator.mthod' (did you mean 'integrator.method'?)" in capsys.readouterr().err
+
+
+def test_ctrl_c_during_a_study_keeps_the_finished_runs_and_a_rerun_continues(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "study"
+    # pendulum runs of 0.3 s to 2.5 s each: the signal lands inside the second one
+    cmd = [sys.executable, "-m", "liegroup_int", "converge", "pendulum", "--param", "integrator.dt", "--values",
+           "6e-5", "3e-5", "1.5e-5", "7.5e-6", "--set", "t_end=1", "--set", "output.hdf5=false",
+           "--set", "output.plots=false", "--set", "output.paraview=false", "--serial", "--out", str(out)]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = out / "run_000" / "summary.json"
+    t0 = time.time()
+    while not first.exists() and time.time() - t0 < 120:
+        time.sleep(0.05)
+    assert first.exists(), p.communicate()
+    time.sleep(0.2)  # inside the second run
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err
+    assert err.count("\n") == 1 and "interrupted after" in err and "Traceback" not in err
+    rows = list(csv.DictReader((out / "study.csv").open()))
+    assert len(rows) >= 1 and all(r["status"] == "ok" for r in rows)
+    stamp = first.stat().st_mtime_ns
+    # the same command again: the finished runs are kept, the rest run
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert first.stat().st_mtime_ns == stamp
+    assert len(list(csv.DictReader((out / "study.csv").open()))) == 4
