@@ -52,7 +52,7 @@ def test_timing_breakdown_and_no_plots(tmp_path):
     assert main(["run", "heavy_top", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.2"]) == 0
     s = json.loads((out / "summary.json").read_text())
     timing = s["timing"]
-    assert set(timing) == {"setup_s", "integrate_s", "output_s", "plots_s"}
+    assert set(timing) == {"compile_s", "setup_s", "integrate_s", "output_s", "plots_s"}
     assert all(v >= 0 for v in timing.values()) and s["plots"] == []
     assert not (out / "history.png").exists()
     # the loop's wall time is the integration plus the outputs written inside it
