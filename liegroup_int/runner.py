@@ -208,7 +208,10 @@ def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None 
     made = []
     data = read_history(history)
     if len(data.get("t", [])) >= 2:
-        made.append(plot_history(data, out_dir / "history.png", title=scene.name).name)
+        step = f"dt = {scene.integrator.dt:g} s" if isinstance(scene.integrator.dt, float) else (
+            f"rtol = {scene.integrator.rtol:g}" if scene.integrator.rtol else "")
+        title = f"{scene.name}: {scene.integrator.method}" + (f", {step}" if step else "")
+        made.append(plot_history(data, out_dir / "history.png", title=title).name)
     if shapes is not None and len(shapes["t"]) >= 2:
         np.savez_compressed(out_dir / "shapes.npz", **shapes)
         made.append(plot_shapes(shapes["t"], shapes["centreline"], out_dir / "shapes.png", title=scene.name).name)

@@ -16,6 +16,14 @@ def _pyplot():
     return plt
 
 
+#: Axis labels with units of the recorded quantities (history column groups).
+UNITS = {"tip": "tip position [m]", "work": "work of the loads [J]",
+         "energy_balance": "E_kin + E_strain - W - E0 [J]", "kinetic": "kinetic energy [J]",
+         "strain": "strain energy [J]", "momentum": "momentum [kg m/s]", "angular_momentum": "angular momentum [N m s]",
+         "orth_error": "|R^T R - I| [-]", "omega_body": "body angular velocity [rad/s]", "R": "R [-]"}
+UNIT_OF = {"energy": "J", "casimir": "-"}
+
+
 def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "") -> Path:
     """One panel per group of columns (``tip_*`` together, others alone), against ``t``.
 
@@ -31,12 +39,15 @@ def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "") ->
         groups.setdefault(key, []).append(name)
     fig, axes = plt.subplots(len(groups), 1, figsize=(7, 2.2 * len(groups) + 0.6), sharex=True, squeeze=False)
     for ax, (key, cols) in zip(axes[:, 0], groups.items()):
+        label = UNITS.get(key, key)
         for c in cols:
             y = history[c]
             if key in ("energy", "casimir"):
                 ax.plot(t, y - y[0], label=f"{c} - {c}(0)")
+                label = f"{key} - {key}(0) [{UNIT_OF.get(key, '-')}]"
             else:
                 ax.plot(t, y, label=c)
+        ax.set_ylabel(label, fontsize=8)
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("t [s]")
