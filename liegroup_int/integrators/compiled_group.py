@@ -98,11 +98,7 @@ def _user_field(data, t, y, out):
 
 def _user_rate(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
-    w = USER_F(t, y.reshape(data[5]))
-    if w.ndim != 1 or w.shape[0] != out.shape[0]:
-        raise ValueError("f(t, y) must return a float array of shape (space.dim,)")
-    for k in range(out.shape[0]):
-        out[k] = w[k]
+    _user_field(data, t, y, out)  # the compiled copy bound next to this one (_user_kernels)
     dexpinv_flat(data[0], data[1], data[2], u, out, out, 0)
     return 0.0
 
@@ -117,9 +113,9 @@ def _user_kernels(f) -> EngineKernels:
     if kern is None:
         ns = dict(globals(), USER_F=f)
         made = {}
-        for fn in (_user_field, _user_rate):
+        for fn in (_user_field, _user_rate):  # _user_rate calls the compiled _user_field
             copy = types.FunctionType(fn.__code__, ns, fn.__name__)
-            made[fn.__name__] = njit(cache=False)(copy)
+            made[fn.__name__] = ns[fn.__name__] = njit(cache=False)(copy)
         kern = EngineKernels("user", made["_user_rate"], group_action, group_angle, group_scale,
                              field=made["_user_field"], dexpinv=group_dexpinv, cache=False)
         _USER_KERNELS[f] = kern
