@@ -31,8 +31,9 @@ copy of each with those names bound to a plugin's kernels (a new function object
 same code, with its own globals) and compiles it: numba inlines calls to the kernels, as
 for a closure over other ``@njit`` functions. Unlike a closure (whose captured
 dispatchers pickle differently in every process), the copies can be cached on disk:
-each is named after the plugin and a hash of the kernels' source files, so numba keeps
-one cache entry per plugin and a change to the kernels' files compiles anew.
+each is named after the plugin and a hash of the package's and the kernels' source files,
+so numba keeps one cache entry per plugin and any change to the code they call compiles
+anew.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ import inspect
 import math
 import types
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -355,17 +357,19 @@ _ENGINES: dict[EngineKernels, Engine] = {}
 
 
 def _source_hash(kernels: EngineKernels) -> str:
-    """Hash of the source files of the kernels (numba's cache watches only this file)."""
-    files = set()
+    """Hash of every source file the compiled loops may depend on: the kernels' own files
+    and all of the ``liegroup_int`` package (numba's cache watches only the file of the
+    function it caches, here this one, so an edit to a callee elsewhere, e.g. a group
+    kernel the plugin's kernels call, must change the copies' names to be compiled anew)."""
+    files = {p for p in Path(__file__).resolve().parents[1].rglob("*.py")}
     for k in (kernels.rate, kernels.action, kernels.angle, kernels.scale, kernels.end_step, kernels.field,
               kernels.dexpinv, kernels.new_state, kernels.copy_state, kernels.increment_view,
               kernels.increment_views):
         if k is not None:
-            files.add(inspect.getfile(getattr(k, "py_func", k)))
+            files.add(Path(inspect.getfile(getattr(k, "py_func", k))).resolve())
     h = hashlib.sha1()
     for path in sorted(files):
-        with open(path, "rb") as fh:
-            h.update(fh.read())
+        h.update(path.read_bytes())
     return h.hexdigest()[:12]
 
 
