@@ -1,4 +1,4 @@
-"""Command line: ``liegroup-int run|scenes ...``.
+"""Command line: ``liegroup-int run|scenes|compile ...``.
 
 Errors in scenes or arguments print one line ``error: ...`` and exit with code 2; a run
 that stops early (blow-up) exits with code 3 after saving what it computed.
@@ -65,6 +65,13 @@ def _parser() -> argparse.ArgumentParser:
                     help="skip our runs predicted to need more CPU seconds than this")
     be.add_argument("--out", type=Path, default=None, help="output directory (default: bench/SCENE)")
     be.add_argument("--fresh", action="store_true", help="recompute instead of reusing cached runs")
+    co = sub.add_parser("compile", help="compile the kernels of the built-in scenes ahead of the first run")
+    co.add_argument("sets", nargs="*", metavar="SET",
+                    help="kernel sets to compile (default: those of the built-in scenes as shipped; "
+                         "`--list` names them all)")
+    co.add_argument("--all", action="store_true", help="every kernel set: adaptive pairs and the mixed formulation too")
+    co.add_argument("--jobs", type=int, default=None, metavar="N", help="processes compiling side by side (default: cores)")
+    co.add_argument("--list", action="store_true", help="list the kernel sets")
     sc = sub.add_parser("scenes", help="list the built-in scenes")
     sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
     return p
@@ -206,6 +213,32 @@ def _bench(args) -> int:
     return 0
 
 
+def _compile(args) -> int:
+    import time
+
+    from .precompile import DEFAULT_SETS, KERNEL_SETS, compile_sets
+
+    if args.list:
+        for name, ks in KERNEL_SETS.items():
+            print(f"{name:22s} {ks.description}")
+        return 0
+    names = list(KERNEL_SETS) if args.all else (args.sets or list(DEFAULT_SETS))
+    unknown = [n for n in names if n not in KERNEL_SETS]
+    if unknown:
+        import difflib
+
+        close = difflib.get_close_matches(unknown[0], list(KERNEL_SETS), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else f"; known: {', '.join(KERNEL_SETS)}"
+        raise SceneError(f"compile: unknown kernel set {unknown[0]!r}{hint}")
+    if args.jobs is not None and args.jobs < 1:
+        raise SceneError(f"compile: --jobs {args.jobs}: expected a positive number of processes")
+    print(f"compiling {len(names)} kernel set(s): {', '.join(names)} (cached for later runs)", file=sys.stderr)
+    c = time.perf_counter()
+    compile_sets(names, args.jobs, report=lambda n, s: print(f"  {n}: {s:.1f} s", file=sys.stderr))
+    print(f"compiled in {time.perf_counter() - c:.1f} s", file=sys.stderr)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
@@ -221,6 +254,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if args.command in ("converge", "sweep"):
             return _study(args)
+        if args.command == "compile":
+            return _compile(args)
         if args.command == "bench":
             return _bench(args)
         if args.command == "plot":

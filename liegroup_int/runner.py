@@ -74,6 +74,45 @@ def output_times(t_end: float, every: float) -> np.ndarray:
 _MISSING = object()
 
 
+class CompileNotice:
+    """Says once on stderr that numba is compiling (a first run), as the first compilation
+    starts: the set-up and the warm-up may compile kernels, which takes seconds the user
+    would otherwise wait through in silence. A context manager; inert without numba."""
+
+    MESSAGE = "compiling kernels (first run only; `liegroup-int compile` does it ahead of time) ..."
+
+    def __init__(self, enabled: bool):
+        self.enabled, self.said, self._cm = enabled, False, None
+
+    def __enter__(self):
+        if not self.enabled:
+            return self
+        try:
+            from numba.core import event
+        except ImportError:  # pragma: no cover - numba is a dependency
+            return self
+        notice = self
+
+        class _Listener(event.Listener):
+            def on_start(self, ev):
+                if not notice.said:
+                    notice.said = True
+                    print(CompileNotice.MESSAGE, file=sys.stderr, flush=True)
+
+            def on_end(self, ev):
+                pass
+
+        self._cm = event.install_listener("numba:compile", _Listener())
+        self._cm.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        if self._cm is not None:
+            self._cm.__exit__(*exc)
+            self._cm = None
+        return False
+
+
 def _warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
     """Compile (or load from numba's cache) the engine's loop the run will use, with one
     throw-away step from ``(t0, y0)``; returns the seconds it took (0 without a compiled
@@ -240,6 +279,13 @@ def _install_signal_handlers(ckpt: Checkpointer):
 
 
 def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None) -> RunResult:
+    """Integrate ``scene`` and write its results into ``out_dir`` (:func:`_run_scene`);
+    without ``quiet``, a line on stderr says when numba compiles (a first run)."""
+    with CompileNotice(enabled=not quiet):
+        return _run_scene(scene, out_dir, quiet, resume)
+
+
+def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir``.
 
     Parameters

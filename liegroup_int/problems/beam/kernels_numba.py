@@ -3,16 +3,16 @@
 Same mathematics as the NumPy path of :mod:`.problem` and :mod:`.kinematics`, fused into
 one loop over the collocation points per call:
 
-* :func:`action_kernel`: ``theta, theta_s, theta_ss`` at the collocation points from the
+* :func:`action_kernel` (primal; :func:`action_mixed` for the mixed formulation): ``theta, theta_s, theta_ss`` at the collocation points from the
   control values (banded ``N0, N1, N2``), ``R <- exp(hat(theta)) R``, the curvature update
   (eqs. 52-53 of method.md section 1: ``K' = K + R^T J_r theta_s`` and its s-derivative,
   with ``B1 = B'/t`` and ``C1 = C'/t``), ``c, v, w`` plus their increments.
-* :func:`rates_kernel`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains
+* :func:`rates_into`: ``c_s, c_ss, v_c, w_c, theta_c`` (banded matvecs), strains
   (plus ``tau`` times their rates with Kelvin-Voigt damping), resultants, balance
   residuals, enhanced-collocation terms at Neumann ends, ``dexpinv``, Dirichlet rows set
   to zero, all into a row-contiguous ``(n, 12)`` right-hand side whose forward (``L``)
   sweep runs in the same loop; then the backward (``U``) sweep writes the ``(4, n, 3)``
-  rate.
+  rate (:func:`rates_into_mixed` for the mixed formulation).
 * :func:`rotation_angle_kernel`: ``max |N0 u_theta|`` (the driver calls it every step).
 * ``engine_*``: the kernels the compiled engine (:mod:`liegroup_int.integrators.engine`)
   runs its fixed-step and adaptive loops with (:data:`ENGINE_KERNELS`,
@@ -373,10 +373,10 @@ def _rotate_point(R, R2, i, cA, cB, t0, t1, t2):
 def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
     """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2, Ks2``: with the
     curvature derivative update (eq. 53), which the primal balance laws read; the mixed
-    formulation takes :func:`_action_mixed`."""
-    if si[_H_FORM] == FORM_MIXED:
-        _action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si)
-        return
+    formulation takes :func:`action_mixed`.
+
+    Each formulation has its own kernels (no run-time branch between them), so that a run
+    compiles only the one it uses."""
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W = c.shape[0], band.shape[2]
     thr = prm[_P_THR]
@@ -435,7 +435,7 @@ def action_kernel(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
 
 
 @njit(cache=True, fastmath=_FM)
-def _action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
+def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
     """The action without the curvature derivative (the mixed balance laws do not read
     ``K_s``, which is carried unchanged): no ``theta_ss``, ``B1``, ``C1``."""
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
@@ -470,49 +470,22 @@ def _action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
 
 
 # ====================================================================== stage rates
-@njit(cache=True, fastmath=False)
-def dirichlet_rows(sf, si):
-    """Boolean ``(n,)`` masks ``(fixp, fixr)``: rows whose position (and velocity) or
-    rotation (and angular velocity) rates are prescribed (zero), method.md section 3."""
-    prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
-    n, ne = si[_H_N], endf.shape[0]
-    fixp = np.zeros(n, dtype=np.bool_)
-    fixr = np.zeros(n, dtype=np.bool_)
-    for e in range(ne):
-        if endi[e, 1] != 0:
-            fixp[endi[e, 0]] = True
-        if endi[e, 2] != 0:
-            fixr[endi[e, 0]] = True
-    return fixp, fixr
-
-
-@njit(cache=True, fastmath=False)
-def rates_kernel(c, v, w, R, K, Ks, u, sf, si, out):
-    """Stage rate ``k = M_c^-1 rhs`` into ``out`` ``(4, n, 3)`` (problem._rates + _solve).
-
-    ``u`` is the stage increment (its rotational component gives ``theta_c`` for
-    ``dexpinv``); pass zeros for the plain vector field.
-    """
-    fixp, fixr = dirichlet_rows(sf, si)
-    x = np.empty((c.shape[0], X_COLS if si[_H_FORM] == FORM_MIXED else _X_NM))
-    rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, np.empty(1))
-
-
 @njit(cache=True, fastmath=_FM)
 def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
-    """:func:`rates_kernel` without allocation: ``fixp, fixr`` from :func:`dirichlet_rows`,
-    ``x`` an ``(n, 12)`` work array (``(n, X_COLS)`` for the mixed formulation; overwritten
-    with the right-hand sides). When the problem has loads that work or viscous damping,
-    ``pw[0]`` receives the power (``quadrature_rate``).
+    """Stage rate ``k = M_c^-1 rhs`` of the primal formulation into ``out`` ``(4, n, 3)``
+    (``problem._rates`` + ``_solve``); the mixed formulation takes :func:`rates_into_mixed`.
+
+    ``u`` is the stage increment (its rotational component gives ``theta_c`` for
+    ``dexpinv``; zeros for the plain vector field), ``fixp, fixr`` come from
+    :func:`dirichlet_rows`, ``x`` is an ``(n, 12)`` work array (overwritten with the
+    right-hand sides). When the problem has loads that work or viscous damping, ``pw[0]``
+    receives the power (``quadrature_rate``).
 
     The per-point tail (loads, enhanced collocation, ``dexpinv``, rows) is written out here
     and again in :func:`rates_into_mixed`: as one shared inline helper (3-tuples of scalars)
     it cost 13 % of the fused primal step (cantilever p = 4, n_ctrl = 31: 23.2 against
     20.5 us per step) and 10 % of the mixed one.
     """
-    if si[_H_FORM] == FORM_MIXED:
-        rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw)
-        return
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
     lower, dense = si[_H_L], si[_H_DENSE] != 0
@@ -985,12 +958,31 @@ def engine_rate(data, t, y, u, out):
 
 
 @njit(cache=True, fastmath=False, inline="always")
+def engine_rate_mixed(data, t, y, u, out):
+    """:func:`engine_rate` of the mixed formulation."""
+    sf, si, fixp, fixr, x, lpos, lvec, lprof, pw = data
+    _set_loads(sf, lpos, lvec, lprof, t)
+    c, v, w, R, K, Ks = y
+    rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw)
+    return pw[0]
+
+
+@njit(cache=True, fastmath=False, inline="always")
 def engine_action(data, u, y0, y1):
     """``y1 = Lambda(u, y0)``."""
     sf, si = data[0], data[1]
     c0, v0, w0, R0, K0, Ks0 = y0
     c1, v1, w1, R1, K1, Ks1 = y1
     action_kernel(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def engine_action_mixed(data, u, y0, y1):
+    """:func:`engine_action` of the mixed formulation."""
+    sf, si = data[0], data[1]
+    c0, v0, w0, R0, K0, Ks0 = y0
+    c1, v1, w1, R1, K1, Ks1 = y1
+    action_mixed(u, c0, v0, w0, R0, K0, Ks0, c1, v1, w1, R1, K1, Ks1, sf, si)
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -1213,6 +1205,11 @@ class NumbaBeamKernels:
                                (offs["prm"] + _P_M, np.asarray(pb.m_dist, float), dprof)]
         self._t_loads = None
         self._zero = np.zeros((4, n, 3))
+        self.mixed = bool(pb.mixed)
+        # work arrays of the wrappers' rate calls (Dirichlet masks, right-hand sides, power)
+        self._fixp, self._fixr = dirichlet_rows(sf, si)
+        self._x = np.empty((n, X_COLS if self.mixed else _X_NM))
+        self._pw = np.zeros(1)
 
     # ------------------------------------------------------------------ wrappers
     def _set_loads(self, t: float) -> None:
@@ -1227,21 +1224,27 @@ class NumbaBeamKernels:
     def action(self, u, y, state_cls):
         n, e = self.n, np.empty
         c, v, w, K, Ks, R = e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3)), e((n, 3, 3))
-        action_kernel(u, y.c, y.v, y.w, y.R, y.K, y.K_s, c, v, w, R, K, Ks, self.sf, self.si)
+        act = action_mixed if self.mixed else action_kernel
+        act(_c(u), *_c_state(y), c, v, w, R, K, Ks, self.sf, self.si)
         return state_cls(c, v, w, R, K, Ks)
 
     def increment_rate(self, t, y, u):
         if self._profiles:
             self._set_loads(t)
         out = np.empty((4, self.n, 3))
-        rates_kernel(y.c, y.v, y.w, y.R, y.K, y.K_s, u, self.sf, self.si, out)
+        c, v, w, R, K, Ks = _c_state(y)
+        sf, si, fixp, fixr, x, pw = self.sf, self.si, self._fixp, self._fixr, self._x, self._pw
+        if self.mixed:
+            rates_into_mixed(c, v, w, R, K, _c(u), sf, si, fixp, fixr, x, out, pw)
+        else:
+            rates_into(c, v, w, R, K, Ks, _c(u), sf, si, fixp, fixr, x, out, pw)
         return out
 
     def vector_field(self, t, y):
         return self.increment_rate(t, y, self._zero)
 
     def rotation_angle(self, u) -> float:
-        return float(rotation_angle_kernel(u, self.sf, self.si))
+        return float(rotation_angle_kernel(_c(u), self.sf, self.si))
 
     def solve(self, x):
         """``M_c^-1`` on an increment-shaped array ``(4, n, 3)`` (copy)."""
@@ -1277,14 +1280,44 @@ class NumbaBeamKernels:
         def unpack(arrays):
             return state_cls(*arrays)
 
-        return CompiledProblem(ENGINE_KERNELS, data, lambda packed: 12 * n, pack, unpack)
+        kernels = ENGINE_KERNELS_MIXED if self.mixed else ENGINE_KERNELS
+        return CompiledProblem(kernels, data, lambda packed: 12 * n, pack, unpack)
 
 
-#: The beam's kernels for the compiled engine.
-ENGINE_KERNELS = EngineKernels("beam", engine_rate, engine_action, engine_angle, engine_scale,
-                               end_step=engine_end_step, new_state=engine_new_state,
-                               copy_state=engine_copy_state, increment_view=engine_increment_view,
-                               increment_views=engine_increment_views)
+def _engine_kernels(name, rate, action):
+    return EngineKernels(name, rate, action, engine_angle, engine_scale,
+                         end_step=engine_end_step, new_state=engine_new_state,
+                         copy_state=engine_copy_state, increment_view=engine_increment_view,
+                         increment_views=engine_increment_views)
+
+
+#: The beam's kernels for the compiled engine, one set per formulation (a run compiles
+#: the loops of its own formulation only).
+ENGINE_KERNELS = _engine_kernels("beam", engine_rate, engine_action)
+ENGINE_KERNELS_MIXED = _engine_kernels("beam_mixed", engine_rate_mixed, engine_action_mixed)
+
+
+def dirichlet_rows(sf, si):
+    """Boolean ``(n,)`` masks ``(fixp, fixr)``: rows whose position (and velocity) or
+    rotation (and angular velocity) rates are prescribed (zero), method.md section 3
+    (read from the end data in ``si``; plain NumPy, called once per problem)."""
+    n, ne = int(si[_H_N]), int(si[_H_NE])
+    endi = si[si[_H_ENDI]:si[_H_ENDI] + ne * _NEI].reshape(ne, _NEI)
+    fixp = np.zeros(n, dtype=np.bool_)
+    fixr = np.zeros(n, dtype=np.bool_)
+    fixp[endi[endi[:, 1] != 0, 0]] = True
+    fixr[endi[endi[:, 2] != 0, 0]] = True
+    return fixp, fixr
+
+
+def _c(a):
+    """``a`` as a C-contiguous float64 array: the only layout the kernels are compiled for
+    (another layout would compile a second specialization of every kernel it reaches)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _c_state(y):
+    return _c(y.c), _c(y.v), _c(y.w), _c(y.R), _c(y.K), _c(y.K_s)
 
 
 def profile_row(prof) -> np.ndarray | None:

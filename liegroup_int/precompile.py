@@ -1,0 +1,104 @@
+"""Compile the numba kernels and engine loops of the built-in scenes ahead of the first run
+(``liegroup-int compile``).
+
+Numba compiles a kernel the first time it is called and keeps the machine code in its
+on-disk cache (``__pycache__`` next to the sources, or ``NUMBA_CACHE_DIR``): only the first
+run of a kind of problem pays for it. This module does that compilation up front, one
+process per kernel set, so the sets compile side by side on a machine's cores.
+
+A kernel set is what one family of runs compiles: the beam's primal formulation, its mixed
+formulation, the rigid body; each with the engine's fixed-step loop and, on request, its
+adaptive loop. The loops' machine code does not depend on the scene's numbers (sizes,
+constants, tableau), so warming one scene of a family serves every scene of it.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+
+__all__ = ["KernelSet", "KERNEL_SETS", "compile_sets", "warm_scene"]
+
+_ADAPTIVE = ("integrator.method=rkmk45", "integrator.dt=none", "integrator.rtol=1e-6")
+
+
+@dataclass(frozen=True)
+class KernelSet:
+    """One family of runs: a built-in scene and the overrides that select the family."""
+
+    name: str
+    scene: str
+    overrides: tuple[str, ...]
+    description: str
+
+
+#: The kernel sets, fixed-step first (the built-in scenes all run fixed steps).
+KERNEL_SETS: dict[str, KernelSet] = {
+    "beam": KernelSet("beam", "cantilever", (), "beam, primal collocation, fixed step (every built-in beam scene)"),
+    "rigid_body": KernelSet("rigid_body", "heavy_top", (), "rigid body, fixed step (heavy_top, free_rigid_body)"),
+    "beam_adaptive": KernelSet("beam_adaptive", "cantilever", _ADAPTIVE, "beam, primal, adaptive pairs"),
+    "rigid_body_adaptive": KernelSet("rigid_body_adaptive", "heavy_top", _ADAPTIVE, "rigid body, adaptive pairs"),
+    "beam_mixed": KernelSet("beam_mixed", "cantilever", ("space.formulation=mixed",),
+                            "beam, mixed collocation, fixed step"),
+    "beam_mixed_adaptive": KernelSet("beam_mixed_adaptive", "cantilever", ("space.formulation=mixed",) + _ADAPTIVE,
+                                     "beam, mixed collocation, adaptive pairs"),
+}
+
+#: What ``liegroup-int compile`` prepares without ``--all``: the built-in scenes as shipped.
+DEFAULT_SETS = ("beam", "rigid_body")
+
+
+def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
+    """Build ``scene_name`` with ``overrides``, run its start-up checks and one throw-away
+    step of its compiled loop; returns the seconds it took (compilation or cache loads)."""
+    from .guards import start_checks
+    from .integrators import resolve_method
+    from .runner import _warm_up
+    from .scenes import KINDS, load_scene, parse_override
+
+    c = time.perf_counter()
+    scene = load_scene(scene_name, dict(parse_override(s) for s in overrides))
+    sim = KINDS[scene.kind].build(scene)
+    spec = scene.integrator
+    dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
+    tab = resolve_method(spec.method)
+    start_checks(scene, sim, tab, dt, 0.0, sim.y0)
+    _warm_up(sim.problem, tab, 0.0, sim.y0, dt)
+    return time.perf_counter() - c
+
+
+def _warm_set(name: str) -> tuple[str, float]:
+    ks = KERNEL_SETS[name]
+    return name, warm_scene(ks.scene, ks.overrides)
+
+
+def compile_sets(names, jobs: int | None = None, report=None) -> dict[str, float]:
+    """Compile the kernel sets ``names`` (keys of :data:`KERNEL_SETS`) into numba's cache,
+    ``jobs`` processes at a time (default: the machine's cores; 1 compiles in this
+    process). ``report(name, seconds)`` is called as each set finishes. Returns the
+    seconds per set."""
+    names = list(dict.fromkeys(names))
+    unknown = [n for n in names if n not in KERNEL_SETS]
+    if unknown:
+        raise ValueError(f"unknown kernel set {unknown[0]!r}; known: {', '.join(KERNEL_SETS)}")
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(names)))
+    done: dict[str, float] = {}
+    if jobs == 1:
+        for n in names:
+            done[n] = _warm_set(n)[1]
+            if report is not None:
+                report(n, done[n])
+        return done
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    # fresh interpreters: the workers import numba themselves (no fork of a process that has)
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = [pool.submit(_warm_set, n) for n in names]
+        for fut in as_completed(futures):
+            n, s = fut.result()
+            done[n] = s
+            if report is not None:
+                report(n, s)
+    return done
