@@ -288,9 +288,8 @@ def main(argv: list[str] | None = None) -> int:
                 else:
                     scene = _load(args)
                     out = args.out if args.out is not None else Path("runs") / scene.name
-                    _claim(out, args.overwrite)
                     scene_name = scene.name
-                    res = run_scene(scene, out, quiet=args.quiet)
+                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite))
             except RunError as exc:
                 print(f"error: {exc}", file=sys.stderr)
                 return 130 if "interrupted" in str(exc) else 3

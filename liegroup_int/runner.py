@@ -20,6 +20,7 @@ import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -239,6 +240,21 @@ class EnergyGuard:
         self.scale = max(self.scale, e)
 
 
+def _shapes(snapshot, results: Path | None) -> dict | None:
+    """The plugin's shapes (``Simulation.snapshot``): from the snapshots stored in
+    ``results`` (HDF5, closed and complete), else from what the observer kept."""
+    if results is None:
+        return snapshot.shapes() if hasattr(snapshot, "shapes") else None
+    if not hasattr(snapshot, "from_snapshots"):
+        return None
+    import h5py
+
+    with h5py.File(results, "r") as f:
+        snaps = f["snapshots"]
+        # datasets, read by the plugin as it needs them (the beam reads the control points)
+        return snapshot.from_snapshots(snaps["t"][:], {k: snaps[k] for k in snaps if k != "t"})
+
+
 def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None = None) -> list[str]:
     """History PNG, and for problems that record shapes (``Simulation.snapshot``), a
     deformed-shape PNG and shapes.npz."""
@@ -278,14 +294,16 @@ def _install_signal_handlers(ckpt: Checkpointer):
     return old
 
 
-def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None) -> RunResult:
+def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None,
+              claim: Callable[[Path], None] | None = None) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir`` (:func:`_run_scene`);
     without ``quiet``, a line on stderr says when numba compiles (a first run)."""
     with CompileNotice(enabled=not quiet):
-        return _run_scene(scene, out_dir, quiet, resume)
+        return _run_scene(scene, out_dir, quiet, resume, claim)
 
 
-def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None) -> RunResult:
+def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None,
+               claim: Callable[[Path], None] | None = None) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir``.
 
     Parameters
@@ -296,6 +314,10 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         No progress bar.
     resume : dict, optional
         A checkpoint (:func:`read_checkpoint`) to continue from; outputs are appended.
+    claim : callable, optional
+        ``claim(out_dir)`` before the first file is written, after the scene's start-up
+        checks (so that a scene error is reported before a question about the directory);
+        it may raise to refuse the directory.
 
     Raises
     ------
@@ -333,6 +355,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
             + (f" (ParaView: {n_out} VTU files)" if scene.output.paraview and sim.frames is not None else "")]
     for w in guard_warnings:
         print(f"warning: {w}", file=sys.stderr)
+    if claim is not None:
+        claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t_out = output_times(scene.t_end, every)
     t_out = t_out[t_out > t0 + 1e-9 * every]
@@ -368,7 +392,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
             h5.truncate_after(t0 + 1e-9 * every)
         observers.append(h5)
     shapes = None
-    if sim.snapshot is not None:
+    # shapes come from the snapshots in results.h5; a run without HDF5 keeps them itself
+    if sim.snapshot is not None and h5 is None:
         observers.append(sim.snapshot)
     if scene.output.paraview and sim.frames is not None:
         from .io.paraview import FrameSeriesWriter
@@ -467,8 +492,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         summary["final"] = sim.final_state(y_final) | {"t": t_reached}
     else:
         summary["error"] = error
-    if sim.snapshot is not None and hasattr(sim.snapshot, "shapes"):
-        shapes = sim.snapshot.shapes()
+    if sim.snapshot is not None and scene.output.plots:
+        shapes = _shapes(sim.snapshot, out_dir / "results.h5" if h5 is not None else None)
     loop_s = time.perf_counter() - start
     c = time.perf_counter()
     summary["plots"] = write_plots(out_dir, scene, history, shapes) if scene.output.plots else []

@@ -289,7 +289,9 @@ def diagnostics(pb: BeamProblem, names) -> dict:
 
 
 class ShapeRecorder:
-    """Keeps the control points (and times) at output times, for shape plots.
+    """Deformed shapes for the shape plot and shapes.npz: from the state snapshots a run
+    stored in results.h5 (:meth:`from_snapshots`), or, for runs without HDF5 output, from
+    the control points it keeps as an observer at output times.
 
     Parameters
     ----------
@@ -311,12 +313,19 @@ class ShapeRecorder:
         """``{"t", "control_points", "u", "centreline"}`` of the recorded outputs
         (``Simulation.snapshot``: the runner plots ``centreline`` against ``t`` and stores
         all in shapes.npz); ``None`` before two outputs."""
-        if len(self.t) < 2 or self.space is None:
+        return self.from_snapshots(np.asarray(self.t), {"c": np.asarray(self.c)})
+
+    def from_snapshots(self, t: np.ndarray, snapshots: dict) -> dict | None:
+        """:meth:`shapes` from stored snapshots: ``t`` ``(m,)`` and the state arrays of
+        ``BeamSimulation.to_arrays`` stacked over outputs (control points ``c``
+        ``(m, n, 3)``), as arrays or HDF5 datasets."""
+        ctrl = snapshots.get("c")
+        if len(t) < 2 or self.space is None or ctrl is None:
             return None
+        ctrl = np.asarray(ctrl[...], dtype=float)
         u = np.linspace(0.0, 1.0, self.n_points)
-        ctrl = np.asarray(self.c)
         line = np.einsum("uj,mjk->muk", self.space.point_matrix(u), ctrl)
-        return {"t": np.asarray(self.t), "control_points": ctrl, "u": u, "centreline": line}
+        return {"t": np.asarray(t), "control_points": ctrl, "u": u, "centreline": line}
 
 
 def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
