@@ -44,6 +44,7 @@ def main(argv=None):
     a.out.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(a.out / "heavy_top.png", dpi=100)
+    print(f"wrote {a.out / 'heavy_top.png'}")
     return runs
 
 

@@ -35,6 +35,7 @@ def main(argv=None):
     ax.set_title(f"{run.name}: beam.pvd read back with meshio, section axis d2")
     fig.tight_layout()
     fig.savefig(out, dpi=100)
+    print(f"wrote {out}")
     return len(shown)
 
 

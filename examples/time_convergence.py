@@ -22,6 +22,7 @@ def main(argv=None):
     studies.write_study(a.out / "time_convergence", rows, table)
     rate = studies.table_rate(table)
     print(f"fitted order of RKMK4: {rate:.3f}")
+    print(f"wrote {a.out / 'time_convergence'} (study.csv, convergence.csv, plots)")
     return rate
 
 

@@ -255,9 +255,11 @@ def _shapes(snapshot, results: Path | None) -> dict | None:
         return snapshot.from_snapshots(snaps["t"][:], {k: snaps[k] for k in snaps if k != "t"})
 
 
-def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None = None) -> list[str]:
-    """History PNG, and for problems that record shapes (``Simulation.snapshot``), a
-    deformed-shape PNG and shapes.npz."""
+def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None = None,
+                energy_scale: float = 0.0) -> list[str]:
+    """History PNG (the energy balance relative to ``energy_scale`` when given), and for
+    problems that record shapes (``Simulation.snapshot``), a deformed-shape PNG and
+    shapes.npz."""
     from .io import plot_history, plot_shapes, read_history
 
     made = []
@@ -266,7 +268,8 @@ def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None 
         step = f"dt = {scene.integrator.dt:g} s" if isinstance(scene.integrator.dt, float) else (
             f"rtol = {scene.integrator.rtol:g}" if scene.integrator.rtol else "")
         title = f"{scene.name}: {scene.integrator.method}" + (f", {step}" if step else "")
-        made.append(plot_history(data, out_dir / "history.png", title=title).name)
+        made.append(plot_history(data, out_dir / "history.png", title=title, energy_scale=energy_scale,
+                                 balance_tolerance=scene.guard.energy_balance).name)
     if shapes is not None and len(shapes["t"]) >= 2:
         np.savez_compressed(out_dir / "shapes.npz", **shapes)
         made.append(plot_shapes(shapes["t"], shapes["centreline"], out_dir / "shapes.png", title=scene.name).name)
@@ -496,7 +499,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         shapes = _shapes(sim.snapshot, out_dir / "results.h5" if h5 is not None else None)
     loop_s = time.perf_counter() - start
     c = time.perf_counter()
-    summary["plots"] = write_plots(out_dir, scene, history, shapes) if scene.output.plots else []
+    scale = balance.scale if balance is not None else 0.0
+    summary["plots"] = write_plots(out_dir, scene, history, shapes, scale) if scene.output.plots else []
     summary["timing"] = {
         "compile_s": compile_s,  # the compiled step loop: numba compilation, or loading it from the cache
         "setup_s": setup_s,  # scene, space, damping sizing, dt = "auto", guards, writers

@@ -24,10 +24,14 @@ UNITS = {"tip": "tip position [m]", "work": "work of the loads [J]",
 UNIT_OF = {"energy": "J", "casimir": "-"}
 
 
-def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "") -> Path:
+def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "", energy_scale: float = 0.0,
+                 balance_tolerance: float = 0.0) -> Path:
     """One panel per group of columns (``tip_*`` together, others alone), against ``t``.
 
-    Energy-like columns are shown as the change from their initial value.
+    Energy-like columns are shown as the change from their initial value. With an
+    ``energy_scale`` (the run's largest ``|E|``, ``|W|``: summary.json
+    ``energy_balance.energy_scale``), the energy balance ``E - W - E0`` (load work included)
+    is shown relative to it on a log scale, with the guard's ``balance_tolerance``.
     """
     plt = _pyplot()
     t = history["t"]
@@ -40,6 +44,16 @@ def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "") ->
     fig, axes = plt.subplots(len(groups), 1, figsize=(7, 2.2 * len(groups) + 0.6), sharex=True, squeeze=False)
     for ax, (key, cols) in zip(axes[:, 0], groups.items()):
         label = UNITS.get(key, key)
+        if key == "energy_balance" and energy_scale > 0:
+            rel = np.abs(history[key]) / energy_scale
+            shown = rel > 0
+            ax.semilogy(t[shown], rel[shown], label=f"|E - W - E0| / {energy_scale:.3g} J")
+            if balance_tolerance > 0:
+                ax.axhline(balance_tolerance, color="C3", ls="--", lw=1, label=f"guard ({balance_tolerance:g})")
+            ax.set_ylabel("energy balance / energy scale [-]", fontsize=8)
+            ax.legend(loc="best", fontsize=8)
+            ax.grid(alpha=0.3, which="both")
+            continue
         for c in cols:
             y = history[c]
             if key in ("energy", "casimir"):
@@ -116,8 +130,16 @@ def plot_run(run_dir: Path, times=None, formats=("png", "pdf")) -> list[Path]:
     if not hist.exists():
         raise FileNotFoundError(f"{run_dir}: no history.csv (not a run directory)")
     data = read_history(hist)
+    scale, tol = 0.0, 0.0
+    summary = run_dir / "summary.json"
+    if summary.exists():
+        import json
+
+        eb = json.loads(summary.read_text()).get("energy_balance") or {}
+        scale, tol = float(eb.get("energy_scale") or 0.0), float(eb.get("tolerance") or 0.0)
     for fmt in formats:
-        made.append(plot_history(data, run_dir / f"plot_history.{fmt}", title=run_dir.name))
+        made.append(plot_history(data, run_dir / f"plot_history.{fmt}", title=run_dir.name, energy_scale=scale,
+                                 balance_tolerance=tol))
     shapes = run_dir / "shapes.npz"
     if shapes.exists():
         with np.load(shapes) as z:

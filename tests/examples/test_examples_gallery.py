@@ -19,18 +19,26 @@ def test_every_example_is_covered():
                                                        "time_convergence", "render_pvd"}
 
 
-def test_heavy_top(tmp_path):
+def _wrote(capsys) -> list[Path]:
+    """The paths an example says it wrote (``wrote PATH ...`` lines)."""
+    return [Path(ln.split()[1].rstrip(";")) for ln in capsys.readouterr().out.splitlines() if ln.startswith("wrote ")]
+
+
+def test_heavy_top(tmp_path, capsys):
     runs = _load("heavy_top").main(["--quick", "--out", str(tmp_path)])
+    assert _wrote(capsys) == [tmp_path / "heavy_top.png"]
     d, _ = runs["rkmk65, tol = 1e-9"]
     assert abs(d["E"][-1] - d["E"][0]) < 1e-6 * abs(d["E"][0])  # tolerance-limited drift
     assert (tmp_path / "heavy_top.png").exists()
 
 
-def test_pendulum_to_paraview(tmp_path):
+def test_pendulum_to_paraview(tmp_path, capsys):
     res = _load("pendulum_to_paraview").main(["--quick", "--out", str(tmp_path)])
+    assert _wrote(capsys) == [tmp_path / "pendulum"]
     assert res.summary["status"] == "ok"
     assert len(list((tmp_path / "pendulum" / "paraview").glob("*.vtu"))) == 6  # t = 0 and 5 outputs
     assert _load("render_pvd").main([str(tmp_path / "pendulum"), str(tmp_path / "pvd.png")]) == 6
+    assert _wrote(capsys) == [tmp_path / "pvd.png"]
     assert (tmp_path / "pvd.png").stat().st_size > 10000
 
 
@@ -38,6 +46,8 @@ def test_screw_motion_se3():
     assert _load("screw_motion_se3").main(["--quick"]) < 1e-12  # constant body twist: exact up to round-off
 
 
-def test_time_convergence(tmp_path):
+def test_time_convergence(tmp_path, capsys):
     rate = _load("time_convergence").main(["--quick", "--out", str(tmp_path)])
+    [where] = _wrote(capsys)
+    assert where == tmp_path / "time_convergence" and (where / "study.csv").exists()
     assert abs(rate - 4.0) < 0.4
