@@ -105,6 +105,9 @@ def _study(args) -> int:
         grid = studies.expand_grid({args.param: studies.parse_values(args.param, args.values)})
     else:
         grid = studies.expand_grid(studies.parse_grid(args.grid))
+    import time
+
+    clock = time.perf_counter()
     try:
         rows = studies.run_study(args.scene, overrides, grid, out, scheduler=args.scheduler, n_workers=args.workers,
                                  serial=args.serial)
@@ -117,13 +120,15 @@ def _study(args) -> int:
         print(f"error: {exc}; the finished runs are in {out}/study.csv; the same command continues the study",
               file=sys.stderr)
         return 130
+    workers = 1 if args.serial else (args.workers if args.scheduler is None else 1)
+    split = studies.time_split(rows, time.perf_counter() - clock, workers)
     table, no_table = None, None
     if args.command == "converge":
         try:
             table = studies.convergence_table(rows, args.param, quantity=args.quantity)
         except ValueError as exc:  # e.g. every run failed: the rows are still written
             no_table = str(exc)
-    studies.write_study(out, rows, table)
+    studies.write_study(out, rows, table, timing=split)
     failed = [r for r in rows if r["status"] != "ok"]
     for r in rows:
         wall = r["wall_time_s"]
@@ -139,6 +144,7 @@ def _study(args) -> int:
             print(f"fitted rate: {studies.table_rate(table):.3f}")
         except ValueError as exc:
             print(f"no rate fitted: {exc}")
+    print(studies.format_time_split(split))
     if no_table is not None:
         first = next((r.get("error") for r in failed if r.get("error")), None)
         print(f"error: no convergence table: {no_table}" + (f" (run 0: {first})" if first else ""), file=sys.stderr)

@@ -28,6 +28,7 @@ import json
 import logging
 import math
 import shutil
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -157,6 +158,11 @@ class StudyTask:
     run_dir: str
 
 
+#: Keys every study run gets unless the study sets them: no per-run history and shape
+#: plots (about 1 s per run, most of a short run; the study draws its own figures).
+STUDY_DEFAULTS: dict[str, Any] = {"output.plots": False}
+
+
 def prepare_tasks(scene: str | Path, base_overrides: Mapping[str, Any] | None, grid: Sequence[Mapping[str, Any]],
                   out_dir: str | Path) -> list[StudyTask]:
     """Load and validate every grid point's scene; raise on the first invalid one.
@@ -166,7 +172,8 @@ def prepare_tasks(scene: str | Path, base_overrides: Mapping[str, Any] | None, g
     scene : str or Path
         Scene file or built-in name.
     base_overrides : mapping, optional
-        Overrides common to all runs (a grid point's keys take precedence).
+        Overrides common to all runs (a grid point's keys take precedence); they take
+        precedence over :data:`STUDY_DEFAULTS`.
     grid : sequence of mapping
         Grid points (see :func:`expand_grid`).
     out_dir : str or Path
@@ -190,7 +197,7 @@ def prepare_tasks(scene: str | Path, base_overrides: Mapping[str, Any] | None, g
     out_dir = Path(out_dir).resolve()
     tasks = []
     for i, point in enumerate(grid):
-        s = load_scene(scene_ref, {**dict(base_overrides or {}), **dict(point)})
+        s = load_scene(scene_ref, {**STUDY_DEFAULTS, **dict(base_overrides or {}), **dict(point)})
         tasks.append(StudyTask(i, dict(s.raw), s.source, s.name, dict(point), str(out_dir / f"run_{i:03d}")))
     return tasks
 
@@ -240,6 +247,7 @@ def run_task(task: StudyTask) -> dict:
         return done
     if Path(task.run_dir).exists():  # an unfinished run: start it again from nothing
         shutil.rmtree(task.run_dir)
+    c = time.perf_counter()
     try:
         scene = build_scene(task.given, task.source, task.name)
         res = run_scene(scene, Path(task.run_dir), quiet=True)
@@ -249,14 +257,50 @@ def run_task(task: StudyTask) -> dict:
         return _failed_row(task, exc)
     except SceneError as exc:
         return _failed_row(task, exc)
-    return _row(task, res.summary)
+    return _row(task, res.summary, time.perf_counter() - c)
 
 
-def _row(task: StudyTask, s: Mapping) -> dict:
+def _row(task: StudyTask, s: Mapping, task_s: float | None = None) -> dict:
+    """A finished run's row; ``timing`` is its summary's split (compile, setup, integrate,
+    output, plots) and ``task_s`` the time of the whole task in its process."""
     return _plain({"run": task.index, "overrides": task.overrides, "status": s["status"], "steps": s.get("steps"),
                    "rhs_evals": s.get("rhs_evals"), "wall_time_s": s.get("wall_time_s"),
                    "t_reached": s.get("t_reached"), "final": s.get("final"), "error": None,
-                   "run_dir": task.run_dir})
+                   "run_dir": task.run_dir, "timing": s.get("timing"), "task_s": task_s})
+
+
+def time_split(rows: Sequence[Mapping], wall_s: float, workers: int = 1) -> dict:
+    """Where a study's time went: the runs' own split summed over the runs (``integrate``,
+    ``output``, ``plots``, ``setup`` with compilation), the rest of the tasks (scene
+    parsing, directories), and what lies outside the runs: ``wall_s`` less the tasks' time
+    shared over ``workers`` processes (process and cluster start, imports, scheduling).
+    Runs kept from an earlier study count for nothing."""
+    keys = ("integrate_s", "output_s", "plots_s")
+    split = dict.fromkeys(keys + ("setup_s", "task_rest_s"), 0.0)
+    task_total = 0.0
+    for r in rows:
+        tm, ts = r.get("timing"), r.get("task_s")
+        if not tm or ts is None:
+            continue
+        for k in keys:
+            split[k] += float(tm.get(k, 0.0))
+        inside = sum(float(tm.get(k, 0.0)) for k in keys)
+        setup = float(tm.get("setup_s", 0.0)) + float(tm.get("compile_s", 0.0))
+        split["setup_s"] += setup
+        split["task_rest_s"] += max(0.0, float(ts) - inside - setup)
+        task_total += float(ts)
+    split["outside_runs_s"] = max(0.0, wall_s - task_total / max(1, workers))
+    split["wall_s"] = wall_s
+    split["workers"] = workers
+    return split
+
+
+def format_time_split(split: Mapping) -> str:
+    """One line: the study's wall time and where the runs' time went."""
+    return (f"time: {split['wall_s']:.2f} s wall ({split['workers']} process(es)); summed over the runs: "
+            f"integrate {split['integrate_s']:.2f} s, outputs {split['output_s']:.2f} s, plots {split['plots_s']:.2f} s, "
+            f"set-up and compilation {split['setup_s']:.2f} s, rest of the tasks {split['task_rest_s']:.2f} s; "
+            f"outside the runs (processes, cluster, imports) {split['outside_runs_s']:.2f} s")
 
 
 def _finished_row(task: StudyTask) -> dict | None:
@@ -649,12 +693,14 @@ def plot_work_precision(table: Sequence[Mapping], path: Path) -> Path:
     return path
 
 
-def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Mapping] | None = None) -> list[Path]:
+def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Mapping] | None = None,
+                timing: Mapping | None = None) -> list[Path]:
     """Write a study's results.
 
     Files: ``study.csv`` (one line per run: run, override keys, status, steps,
     rhs_evals, wall_time_s, t_reached, flattened ``final.*`` fields, error, run_dir) and
-    ``study.json`` (``{"rows", "convergence", "rate"}``). With a ``table`` also
+    ``study.json`` (``{"rows", "convergence", "rate", "timing"}``; ``timing`` from
+    :func:`time_split`). With a ``table`` also
     ``convergence.csv``, ``convergence.png`` (error vs parameter, log-log, fitted slope
     in the legend when >= 3 positive errors) and ``work_precision.png`` (error vs wall
     time), the PNGs only when some error is positive.
@@ -666,6 +712,8 @@ def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Ma
         From :func:`run_study`.
     table : sequence of dict, optional
         From :func:`convergence_table`.
+    timing : mapping, optional
+        From :func:`time_split`.
 
     Returns
     -------
@@ -683,7 +731,8 @@ def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Ma
         except ValueError:
             rate = None
     convergence = _plain(list(table)) if table is not None else None
-    doc = {"rows": _plain(list(rows)), "convergence": convergence, "rate": rate}
+    doc = {"rows": _plain(list(rows)), "convergence": convergence, "rate": rate,
+           "timing": _plain(dict(timing)) if timing is not None else None}
     (out_dir / "study.json").write_text(json.dumps(doc, indent=2) + "\n")
     written.append(out_dir / "study.json")
     if table:

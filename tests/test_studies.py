@@ -20,12 +20,13 @@ from liegroup_int.studies import (
     quantity_vector,
     run_study,
     table_rate,
+    time_split,
     write_study,
 )
 
 DTS = [0.02, 0.01, 0.005, 0.0025]
 BASE = {"t_end": 1.0, "integrator.method": "rkmk4"}
-TIMING = ("wall_time_s", "run_dir")
+TIMING = ("wall_time_s", "run_dir", "timing", "task_s")
 
 
 @pytest.fixture(scope="module")
@@ -55,6 +56,20 @@ def test_serial_rows(serial_rows):
         assert (out / f"run_{r['run']:03d}" / "summary.json").exists()
         assert np.asarray(r["final"]["R"]).shape == (3, 3) and len(r["final"]["omega_body"]) == 3
     json.dumps(rows)  # plain Python values only
+
+
+def test_study_runs_skip_their_plots_and_report_their_time(serial_rows):
+    """Study runs draw no per-run plots (STUDY_DEFAULTS), and the time split adds up: the
+    runs' parts plus the rest of each task are the tasks' time, and the wall time is the
+    tasks' time plus what lies outside them."""
+    out, rows = serial_rows
+    assert not list(out.glob("run_*/history.png")) and not list(out.glob("run_*/shapes.png"))
+    tasks = sum(r["task_s"] for r in rows)
+    split = time_split(rows, wall_s=tasks + 0.5, workers=1)
+    parts = sum(split[k] for k in ("integrate_s", "output_s", "plots_s", "setup_s", "task_rest_s"))
+    assert parts == pytest.approx(tasks, rel=1e-12)
+    assert split["plots_s"] < 1e-3 and split["outside_runs_s"] == pytest.approx(0.5)  # plots_s: the timer alone
+    assert time_split(rows, wall_s=tasks / 2 + 0.25, workers=2)["outside_runs_s"] == pytest.approx(0.25)
 
 
 def test_dask_matches_serial(serial_rows, dask_rows):
