@@ -119,13 +119,16 @@ def _warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
     throw-away step from ``(t0, y0)``; returns the seconds it took (0 without a compiled
     loop). Failures are left to the run itself, which reports them."""
     from .integrators.controller import DEFAULT_CONTROLLER
-    from .integrators.engine import compiled_stepper
 
     c = time.perf_counter()
     try:
-        st = compiled_stepper(problem, tab)
-        if st is None:
+        hook = getattr(problem, "compiled_kernels", None)
+        cp = hook() if hook is not None else None
+        if cp is None:  # no compiled loop (and no import of the engine, hence of numba)
             return 0.0
+        from .integrators.engine import CompiledStepper
+
+        st = CompiledStepper(cp, tab)
         if dt is not None:
             st.advance(t0, y0, t0 + dt, dt, 1, math.inf)
         else:
@@ -301,7 +304,8 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
               claim: Callable[[Path], None] | None = None) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir`` (:func:`_run_scene`);
     without ``quiet``, a line on stderr says when numba compiles (a first run)."""
-    with CompileNotice(enabled=not quiet):
+    compiles = KINDS[scene.kind].compiles
+    with CompileNotice(enabled=not quiet and compiles is not None and compiles(scene)):
         return _run_scene(scene, out_dir, quiet, resume, claim)
 
 

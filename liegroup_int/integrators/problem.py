@@ -202,17 +202,23 @@ class GroupProblem(Problem):
         ``f(t, y) -> xi`` with ``xi`` of shape ``(..., space.dim)``: the *spatial*
         (right-trivialized) velocity, ``dy/dt = hat(xi) y`` for matrix groups, and
         ``dy/dt = xi`` on R^n.
+    compiled : bool
+        Use the groups' compiled (numba) single-point kernels and, for a ``numba.njit``
+        ``f``, the compiled engine. ``False`` keeps to NumPy and never imports numba: for
+        runs too short to repay numba's start-up (about 0.8 s per process).
     """
 
-    def __init__(self, space: LieGroup, f: Callable[[float, np.ndarray], np.ndarray]):
+    def __init__(self, space: LieGroup, f: Callable[[float, np.ndarray], np.ndarray], compiled: bool = True):
         if not isinstance(space, LieGroup):
             raise TypeError(f"GroupProblem: space must be a LieGroup, got {space!r}")
         self.space = space
         self.f = f
-        from ..groups.kernels_numba import CompiledGroup
-
         #: compiled single-point kernels of the built-in groups (None: NumPy only)
-        self._compiled = CompiledGroup.of(space)
+        self._compiled = None
+        if compiled:
+            from ..groups.kernels_numba import CompiledGroup
+
+            self._compiled = CompiledGroup.of(space)
         self._ndim = len(space.point_shape)
 
     def _single(self, y) -> bool:

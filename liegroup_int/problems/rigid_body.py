@@ -94,9 +94,10 @@ class RigidBody:
         omega = np.einsum("...ij,...j->...i", R, W)
         return np.concatenate((omega, torque / I), axis=-1)
 
-    def problem(self) -> GroupProblem:
-        """The RKMK problem on ``SO3 x R3`` (a :class:`RigidBodyProblem`)."""
-        return RigidBodyProblem(self)
+    def problem(self, compiled: bool = True) -> GroupProblem:
+        """The RKMK problem on ``SO3 x R3`` (a :class:`RigidBodyProblem`); ``compiled=False``:
+        NumPy only (no numba import, for short runs)."""
+        return RigidBodyProblem(self, compiled)
 
     # -- diagnostics
     def energy(self, y: np.ndarray) -> np.ndarray:
@@ -147,8 +148,8 @@ class RigidBodyProblem(GroupProblem):
     times in one compiled call when no per-step monitor is given.
     """
 
-    def __init__(self, body: RigidBody):
-        super().__init__(SPACE, body.vector_field)
+    def __init__(self, body: RigidBody, compiled: bool = True):
+        super().__init__(SPACE, body.vector_field, compiled)
         self.body = body
 
     def compiled_kernels(self):
@@ -156,7 +157,7 @@ class RigidBodyProblem(GroupProblem):
         this problem: a subclass of this class or of :class:`RigidBody` overriding the
         dynamics, or ``f``/``space`` replaced."""
         cls = type(self.body)
-        if not (type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
+        if not (self._compiled is not None and type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
                 and all(getattr(cls, k) is getattr(RigidBody, k) for k in ("vector_field", "_I", "_mgchi"))):
             return None
         from .rigid_body_numba import compiled_problem

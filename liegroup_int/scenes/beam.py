@@ -415,4 +415,5 @@ KIND = register_kind(ProblemKind(
     default_quantities=("tip", "energy"),
     build=build,
     check=check,
+    compiles=lambda scene: scene["integrator.backend"] == "numba",
 ))

@@ -38,6 +38,24 @@ def check(scene: Scene) -> None:
         raise SceneError(f"{scene.source}: key 'integrator.dt' = 'auto': automatic steps are available for beam scenes only")
 
 
+#: Fixed-step runs of fewer stage evaluations than this stay in NumPy: numba's start-up in
+#: a process (import, loading the cached kernels: about 0.8 s) costs as much as about
+#: 20,000 stages of the NumPy path (measured 35-45 us per stage on the heavy top; the
+#: compiled engine takes 0.2 us). benchmarks/run_overhead.py measures both sides.
+NUMPY_BELOW_STAGES = 20_000
+
+
+def compiles(scene: Scene) -> bool:
+    """Whether the run uses the compiled kernels: adaptive runs, and fixed-step runs of at
+    least :data:`NUMPY_BELOW_STAGES` stage evaluations."""
+    spec = scene.integrator
+    if not isinstance(spec.dt, float):
+        return True
+    from ..integrators import resolve_method
+
+    return scene.t_end / spec.dt * resolve_method(spec.method).stages >= NUMPY_BELOW_STAGES
+
+
 def build(scene: Scene) -> Simulation:
     body = _body(scene)
     R0 = SO3.exp(np.asarray(scene["initial.rotation"]))
@@ -49,7 +67,9 @@ def build(scene: Scene) -> Simulation:
         R, W = body.split(y)
         return {"R": R.tolist(), "omega_body": W.tolist(), "omega_spatial": (R @ W).tolist()}
 
-    return Simulation(problem=body.problem(), y0=y0, diagnostics=diagnostics, final_state=final_state)
+    compiled = compiles(scene)
+    return Simulation(problem=body.problem(compiled), y0=y0, diagnostics=diagnostics, final_state=final_state,
+                      info={"kernels": "numba" if compiled else "numpy (short run)"})
 
 
 KIND = register_kind(ProblemKind(
@@ -59,4 +79,5 @@ KIND = register_kind(ProblemKind(
     default_quantities=("energy", "casimir", "orth_error"),
     build=build,
     check=check,
+    compiles=compiles,
 ))

@@ -172,6 +172,9 @@ class ProblemKind:
     default_quantities: tuple[str, ...]
     build: Callable[[Scene], Simulation]
     check: Callable[[Scene], None] | None = None
+    #: whether a run of the scene may compile numba kernels (the runner then says so on
+    #: stderr as the first compilation starts); None: never
+    compiles: Callable[[Scene], bool] | None = None
 
 
 def common_keys(kind: ProblemKind) -> dict[str, Key]:
