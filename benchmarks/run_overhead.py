@@ -1,20 +1,26 @@
 """Where a run's time goes: start-up, set-up, integration, outputs and plots.
 
-    python benchmarks/run_overhead.py
+    python benchmarks/run_overhead.py [--no-cold]
 
 Runs the CLI as a user does (``python -m liegroup_int ...`` in a subprocess, numba cache
 warm: one untimed run first) and reports, per case, the process CPU time of the child
 (``resource.getrusage(RUSAGE_CHILDREN)``) and the split that ``summary.json`` records
-(``timing``: setup, integrate, output, plots), with the cost per output row.
+(``timing``: setup, integrate, output, plots), with the cost per output row; for the
+``converge`` study, the split of ``study.json`` (``timing``).
+
+Then (unless ``--no-cold``) the first run on an empty numba cache (``NUMBA_CACHE_DIR`` a
+new directory), without and after ``liegroup-int compile``, in wall-clock seconds.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import resource
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 CASES = [
@@ -29,7 +35,11 @@ CASES = [
      "run"),
     ("heavy_top, 10 steps, --no-plots", ["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.1",
                                          "--set", "integrator.dt=0.01"], "run"),
+    ("heavy_top as shipped (10,000 steps), --no-plots", ["run", "heavy_top", "--quiet", "--no-plots"], "run"),
 ]
+
+STUDY = ["converge", "heavy_top", "--param", "integrator.dt", "--values", "0.02", "0.01", "0.005", "0.0025", "--set",
+         "t_end=1"]
 
 
 def child_cpu() -> float:
@@ -44,6 +54,31 @@ def run(args: list[str], out: Path | None) -> tuple[float, dict | None]:
     cpu = child_cpu() - c0
     summary = json.loads((out / "summary.json").read_text()) if out is not None else None
     return cpu, summary
+
+
+def study(extra: list[str], out: Path) -> tuple[float, dict]:
+    c0 = child_cpu()
+    w0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "liegroup_int", *STUDY, *extra, "--out", str(out)], check=True,
+                   capture_output=True, text=True)
+    return time.perf_counter() - w0, json.loads((out / "study.json").read_text())["timing"]
+
+
+def cold(tmp: Path) -> None:
+    """First runs on an empty numba cache, wall-clock seconds."""
+    def timed(args, cache):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+        w0 = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "liegroup_int", *args], check=True, capture_output=True, text=True,
+                       env=env)
+        return time.perf_counter() - w0
+
+    print("\n| first run, empty numba cache | wall s |")
+    print("|---|---|")
+    print(f"| `run cantilever` | {timed(['run', 'cantilever', '--quiet', '--out', str(tmp / 'c1')], tmp / 'nc1'):.1f} |")
+    print(f"| `compile` (beam, rigid_body) | {timed(['compile'], tmp / 'nc2'):.1f} |")
+    print(f"| then `run cantilever` | {timed(['run', 'cantilever', '--quiet', '--out', str(tmp / 'c2')], tmp / 'nc2'):.1f} |")
+    print(f"| then `run heavy_top` | {timed(['run', 'heavy_top', '--quiet', '--out', str(tmp / 'c3')], tmp / 'nc2'):.1f} |")
 
 
 def main() -> None:
@@ -64,6 +99,15 @@ def main() -> None:
             per = 1e3 * t["output_s"] / max(1, s["history_rows"])
             print(f"| {label} | {cpu:.2f} | {t['setup_s']:.2f} | {t['integrate_s']:.2f} | {t['output_s']:.3f} | "
                   f"{per:.2f} | {t['plots_s']:.2f} | {cpu / t['integrate_s']:.1f}x |")
+        print("\n| `converge heavy_top`, 4 runs of 1 s | wall s | integrate s | outputs s | plots s | set-up s | "
+              "outside the runs s |")
+        print("|---|---|---|---|---|---|---|")
+        for label, extra in (("--serial", ["--serial"]), ("local Dask cluster, 2 workers", [])):
+            wall, t = study(extra, tmp / f"study{len(extra)}")
+            print(f"| {label} | {wall:.2f} | {t['integrate_s']:.2f} | {t['output_s']:.2f} | {t['plots_s']:.2f} | "
+                  f"{t['setup_s']:.2f} | {t['outside_runs_s']:.2f} |")
+        if "--no-cold" not in sys.argv[1:]:
+            cold(tmp)
 
 
 if __name__ == "__main__":
