@@ -74,3 +74,30 @@ def test_compile_sets_in_worker_processes():
     """Two sets side by side in spawned processes (the command's default on 2 cores)."""
     done = compile_sets(["rigid_body", "rigid_body_adaptive"], jobs=2)
     assert sorted(done) == ["rigid_body", "rigid_body_adaptive"] and all(s > 0 for s in done.values())
+
+
+def test_compile_notice_says_so_once_when_numba_compiles(capsys):
+    """A run that compiles prints one line as the first compilation starts; nothing when
+    nothing compiles, and nothing when disabled (quiet runs)."""
+    from numba import njit
+
+    from liegroup_int.runner import CompileNotice
+
+    @njit(cache=False)
+    def fresh(x):
+        return x + 1.0
+
+    @njit(cache=False)
+    def other(x):
+        return x * 2.0
+
+    with CompileNotice(enabled=False):
+        fresh(1.0)
+    assert capsys.readouterr().err == ""
+    with CompileNotice(enabled=True):
+        fresh(1.0)  # compiled already: no notice
+    assert capsys.readouterr().err == ""
+    with CompileNotice(enabled=True):
+        other(1.0)
+        other(2)  # a second specialization: still one line
+    assert capsys.readouterr().err == CompileNotice.MESSAGE + "\n"
