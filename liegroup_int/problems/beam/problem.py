@@ -168,14 +168,23 @@ class BeamProblem(Problem):
         if backend not in ("numpy", "numba"):
             raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
         self.backend = backend
-        self._nb = None
+        self._nb_kernels = None
         if backend == "numba":
-            try:
-                from .kernels_numba import NumbaBeamKernels
-            except ImportError as exc:  # pragma: no cover - depends on the environment
-                raise ImportError(f"backend='numba' needs numba ({exc}); use backend='numpy'") from exc
-            self._nb = NumbaBeamKernels(self)
+            import importlib.util
+
+            if importlib.util.find_spec("numba") is None:  # pragma: no cover - depends on the environment
+                raise ImportError("backend='numba' needs numba (pip install numba); use backend='numpy'")
         # --- end backend selection ----------------------------------------------------
+
+    @property
+    def _nb(self):
+        """The compiled kernels' data and wrappers (backend="numba"), built at first use:
+        checking a scene (building its problem) imports no numba."""
+        if self._nb_kernels is None and self.backend == "numba":
+            from .kernels_numba import NumbaBeamKernels
+
+            self._nb_kernels = NumbaBeamKernels(self)
+        return self._nb_kernels
 
     def with_kelvin_voigt(self, tau: float) -> "BeamProblem":
         """The same problem (space, data, backend, formulation) with damping ``tau`` [s]."""

@@ -1,5 +1,6 @@
-"""Short rigid-body runs stay in NumPy: numba's start-up (about 0.8 s per process) would
-cost more than the run. The NumPy path gives the compiled path's answer."""
+"""Short commands load no numba: short rigid-body runs stay in NumPy (numba's start-up,
+about 0.8 s per process, would cost more than the run; the NumPy path gives the compiled
+path's answer), and `validate` builds a beam problem without its compiled kernels."""
 
 from __future__ import annotations
 
@@ -49,3 +50,12 @@ def test_short_run_imports_no_numba(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.stdout.splitlines()[-1].split() == ["0", "False"], out.stderr[-500:]
     assert json.loads((tmp_path / "r" / "summary.json").read_text())["kernels"] == "numpy (short run)"
+
+
+def test_validate_beam_scene_imports_no_numba():
+    """`validate` checks a beam scene by building its problem; the compiled kernels are
+    built at first use, so validation loads no numba."""
+    code = ("import sys; from liegroup_int.cli import main; "
+            "rc = main(['validate', 'cantilever']); print(rc, 'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.splitlines()[-1].split() == ["0", "False"], out.stderr[-500:]
