@@ -57,7 +57,6 @@ def run(args: list[str], out: Path | None) -> tuple[float, dict | None]:
 
 
 def study(extra: list[str], out: Path) -> tuple[float, dict]:
-    c0 = child_cpu()
     w0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "liegroup_int", *STUDY, *extra, "--out", str(out)], check=True,
                    capture_output=True, text=True)

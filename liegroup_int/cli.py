@@ -65,6 +65,11 @@ def _parser() -> argparse.ArgumentParser:
                     help="skip our runs predicted to need more CPU seconds than this")
     be.add_argument("--out", type=Path, default=None, help="output directory (default: bench/SCENE)")
     be.add_argument("--fresh", action="store_true", help="recompute instead of reusing cached runs")
+    mo = sub.add_parser("modes", help="natural frequencies, damping ratios and mode shapes at the initial state")
+    mo.add_argument("scene")
+    mo.add_argument("--n", type=int, default=10, help="number of modes (lowest |lambda| first; default 10)")
+    mo.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    mo.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-modes)")
     co = sub.add_parser("compile", help="compile the kernels of the built-in scenes ahead of the first run")
     co.add_argument("sets", nargs="*", metavar="SET",
                     help="kernel sets to compile (default: those of the built-in scenes as shipped; "
@@ -219,6 +224,56 @@ def _bench(args) -> int:
     return 0
 
 
+def _modes(args) -> int:
+    """``modes``: the linearized increment map at the initial state, its lowest modes."""
+    import numpy as np
+
+    from .integrators import modal_analysis
+    from .scenes import KINDS
+
+    if args.n < 1:
+        raise SceneError(f"modes: --n {args.n}: expected at least one mode")
+    scene = _load(args)
+    sim = KINDS[scene.kind].build(scene)
+    try:
+        rep = modal_analysis(sim.problem, 0.0, sim.y0, args.n, duration=scene.t_end)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
+    out = args.out if args.out is not None else Path("runs") / f"{scene.name}-modes"
+    from .io.modes import dominant, normalized, plot_modes, write_mode_shapes, write_modes_csv
+
+    shapes, rows = [], []
+    for k, m in enumerate(rep.modes, start=1):
+        row = {"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
+               "im_lambda": m.lam.imag, "growing": m.growing, "dominant": ""}
+        if sim.mode_shape is not None:
+            points, disp, rot = sim.mode_shape(m.vector)
+            disp, rot = normalized(disp, rot)
+            extent = float(np.max(np.ptp(points, axis=0))) or 1.0
+            row["dominant"] = dominant(disp, rot, extent)
+            shapes.append((points, disp, rot))
+        rows.append(row)
+    out.mkdir(parents=True, exist_ok=True)
+    made = [write_modes_csv(out / "modes.csv", rows)]
+    if shapes:
+        made += write_mode_shapes(out, shapes)
+        labels = [f"mode {r['mode']}: {r['freq_hz']:.4g} Hz ({r['dominant']})" for r in rows]
+        made.append(plot_modes(out / "modes.png", shapes, labels, title=f"{scene.name}: mode shapes at t = 0"))
+    print(f"{scene.name}: {len(rows)} lowest modes of the linearization at t = 0 ({rep.size} unknowns; "
+          f"{rep.zero_modes} zero eigenvalues: constraints and rigid-body modes; |lambda|max = {rep.lam_max:.4g} 1/s)")
+    print(f"{'mode':>4}  {'f [Hz]':>12}  {'damping ratio':>13}  dominant")
+    for r in rows:
+        flag = ("  (non-oscillatory)" if r["im_lambda"] == 0.0 or abs(r["damping_ratio"]) >= 1.0 else "") + (
+            "  GROWING" if r["growing"] else "")
+        print(f"{r['mode']:>4}  {r['freq_hz']:12.6g}  {r['damping_ratio']:13.3g}  {r['dominant']}{flag}")
+    grow = [r for r in rows if r["growing"]]
+    if grow:
+        print(f"warning: {scene.source}: {len(grow)} growing mode(s) at t = 0 (Re lambda > 0, growth by more than e "
+              f"over t_end), the fastest {max(r['re_lambda'] for r in grow):.3g} 1/s", file=sys.stderr)
+    print(f"-> {out} ({', '.join(p.name for p in made[:1] + made[-1:])}{', mode_XX.vtu, modes.pvd' if shapes else ''})")
+    return 0
+
+
 def _compile(args) -> int:
     import time
 
@@ -262,6 +317,8 @@ def main(argv: list[str] | None = None) -> int:
             return _study(args)
         if args.command == "compile":
             return _compile(args)
+        if args.command == "modes":
+            return _modes(args)
         if args.command == "bench":
             return _bench(args)
         if args.command == "plot":

@@ -6,7 +6,7 @@ from .methods import METHODS, is_adaptive, resolve_method
 from .observers import DiagnosticsRecorder, Observers, StateRecorder
 from .problem import GroupProblem, Problem
 from .result import BlowUpError, IntegrationError, Solution, Stats, StepSizeError
-from .spectrum import GrowthReport, eigenvalues, growth_check, jacobian, spectral_radius
+from .spectrum import GrowthReport, ModalReport, Mode, eigenvalues, growth_check, jacobian, modal_analysis, spectral_radius
 from .stepsize import StableStep, stable_step
 from .rkmk import combine, compute_stages, error_estimate, error_norm, rkmk_step
 
@@ -14,5 +14,6 @@ __all__ = [
     "integrate", "integrate_fixed", "integrate_adaptive", "initial_step", "MAX_INCREMENT_ANGLE",
     "METHODS", "resolve_method", "is_adaptive", "StateRecorder", "DiagnosticsRecorder", "Observers",
     "Problem", "GroupProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
-    "combine", "eigenvalues", "growth_check", "GrowthReport", "jacobian", "spectral_radius", "StableStep", "stable_step", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
+    "combine", "eigenvalues", "growth_check", "GrowthReport", "jacobian", "spectral_radius", "modal_analysis",
+    "ModalReport", "Mode", "StableStep", "stable_step", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
 ]

@@ -122,3 +122,97 @@ def growth_check(problem: Problem, t: float, y, duration: float, noise: float = 
     re = float(lam.real[k])
     growing = re > noise * lam_max and re * duration > 1.0
     return GrowthReport(lam_max, re, float(abs(lam.imag[k])), bool(growing), m)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One mode of the linearized increment map (:func:`modal_analysis`).
+
+    Attributes
+    ----------
+    lam : complex
+        Eigenvalue [1/s]; oscillatory modes are listed once, with ``Im lam > 0``.
+    freq_hz : float
+        Natural frequency ``|lam| / 2 pi`` [Hz].
+    damping_ratio : float
+        ``-Re lam / |lam|`` (0 undamped or ``|Re lam|`` at the noise level, negative for a
+        growing mode).
+    growing : bool
+        ``Re lam`` above the finite-difference noise (and, given a duration, growth by more
+        than ``e`` over it).
+    vector : ndarray, complex, increment-shaped
+        The eigenvector (unit 2-norm, phase chosen so that its largest entry is real).
+    """
+
+    lam: complex
+    freq_hz: float
+    damping_ratio: float
+    growing: bool
+    vector: np.ndarray
+
+
+@dataclass(frozen=True)
+class ModalReport:
+    """The lowest modes at a state, and what was left out.
+
+    Attributes
+    ----------
+    modes : list of Mode
+        By increasing ``|lam|``.
+    size : int
+        Unknowns (the Jacobian is ``size x size``).
+    lam_max : float
+        Largest ``|lambda|`` [1/s].
+    zero_modes : int
+        Eigenvalues with ``|lambda|`` at the noise level (rigid-body and constraint modes).
+    growing_real : int
+        Real eigenvalues above the noise (non-oscillatory growth, listed among the modes).
+    """
+
+    modes: list
+    size: int
+    lam_max: float
+    zero_modes: int
+    growing_real: int
+
+
+def modal_analysis(problem: Problem, t: float, y, n: int, noise: float = 1e-9,
+                   duration: float | None = None) -> ModalReport:
+    """The ``n`` lowest modes of the linearized increment map at ``(t, y)`` (dense).
+
+    Eigenvalues of ``dG/du`` (:func:`jacobian`) come in pairs ``lambda = -zeta omega +- i
+    omega sqrt(1 - zeta^2)`` for a damped oscillator; each pair is one mode of natural
+    frequency ``|lambda| / 2 pi`` and damping ratio ``-Re lambda / |lambda|``. Eigenvalues
+    with ``|lambda| <= noise |lambda|max`` are rigid-body or constraint modes (counted, not
+    listed); real eigenvalues above the noise are non-oscillatory (a growing one is
+    listed and flagged). The default ``noise`` is the central differences' level (about
+    ``1e-10 |lambda|max`` with relative steps of ``1e-6``), not :func:`growth_check`'s
+    ``1e-6``: stiff sections have ``|lambda|max`` six orders above the first mode. With a
+    ``duration``, a mode counts as growing only if it also grows by more than ``e`` over it
+    (the rule of :func:`growth_check`): near-zero eigenvalues of rigid-body motion carry
+    finite-difference noise of either sign.
+    """
+    if n < 1:
+        raise ValueError(f"n: expected at least one mode, got {n}")
+    z = problem.zero_increment(y)
+    m = int(z.size)
+    if m > MAX_DENSE:
+        raise ValueError(f"{m} unknowns: too many for a dense modal analysis (at most {MAX_DENSE})")
+    lam, vec = np.linalg.eig(jacobian(problem, t, y))
+    lam_max = float(np.max(np.abs(lam)))
+    floor = noise * lam_max
+    mag = np.abs(lam)
+    zero = mag <= floor
+    real = np.abs(lam.imag) <= floor
+    keep = ~zero & ((lam.imag > floor) | (real & (lam.real > floor)))
+    order = np.flatnonzero(keep)[np.argsort(mag[keep], kind="stable")][:n]
+    modes = []
+    for k in order:
+        v = vec[:, k]
+        j = int(np.argmax(np.abs(v)))
+        v = v * (abs(v[j]) / v[j]) / np.linalg.norm(v)
+        zeta = 0.0 if abs(lam[k].real) <= floor else float(-lam[k].real / mag[k])
+        grows = lam[k].real > floor and (duration is None or lam[k].real * duration > 1.0)
+        modes.append(Mode(complex(lam[k]), float(mag[k] / (2 * np.pi)), zeta, bool(grows), v.reshape(z.shape)))
+    return ModalReport(modes, m, lam_max, int(np.count_nonzero(zero)),
+                       int(np.count_nonzero(~zero & real & (lam.real > floor))))

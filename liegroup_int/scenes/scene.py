@@ -147,6 +147,10 @@ class Simulation:
         ``frames(y) -> (points (m, 3), frames (m, 3, 3), point_data)``: a curve with
         section frames, written as a ParaView series when the scene asks for it
         (``output.paraview``); ``None``: the problem has no such picture.
+    mode_shape : callable, optional
+        ``mode_shape(vector) -> (points (k, 3), displacement (k, 3), rotation (k, 3))``: a
+        mode of the linearized increment map (complex, increment-shaped; its real part)
+        along the reference curve, for ``liegroup-int modes``; ``None``: no shapes.
     """
 
     problem: Any
@@ -160,6 +164,7 @@ class Simulation:
     conserved: Callable[[Any], float] | None = None
     stability: Stability | None = None
     frames: Callable[[Any], tuple] | None = None
+    mode_shape: Callable[[Any], tuple] | None = None
 
 
 @dataclass(frozen=True)

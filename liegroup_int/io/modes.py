@@ -1,0 +1,106 @@
+"""Files of a modal analysis (``liegroup-int modes``): table, ParaView shapes, picture."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from .paraview import write_beam_vtu, write_pvd
+
+#: Names of the displacement and rotation components, for the dominant-component label.
+_COMPONENTS = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
+
+
+def dominant(displacement: np.ndarray, rotation: np.ndarray, length: float) -> str:
+    """The displacement component with the largest amplitude along the curve (``u3`` for
+    bending in the x1-x3 plane of a beam along x1, ``u1`` for its axial modes), or the
+    rotation component for modes that hardly displace the curve (largest displacement below
+    5 % of ``length`` times the largest rotation: ``theta1`` for torsion)."""
+    d, r = np.max(np.abs(displacement), axis=0), np.max(np.abs(rotation), axis=0)
+    if np.max(d) >= 0.05 * length * np.max(r):
+        return _COMPONENTS[int(np.argmax(d))]
+    return _COMPONENTS[3 + int(np.argmax(r))]
+
+
+def write_modes_csv(path: Path, rows: list[dict]) -> Path:
+    """``mode, freq_hz, damping_ratio, re_lambda, im_lambda, growing, dominant``."""
+    fields = ["mode", "freq_hz", "damping_ratio", "re_lambda", "im_lambda", "growing", "dominant"]
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in r.items() if k in fields})
+    return Path(path)
+
+
+def write_mode_shapes(out_dir: Path, shapes: list[tuple], stem: str = "mode") -> list[Path]:
+    """One VTU per mode (reference curve with point data ``displacement`` and ``rotation``,
+    normalized to a largest displacement of 1, or rotation when the mode has no
+    displacement) and ``modes.pvd`` indexing them by mode number (ParaView's time slider
+    steps through the modes; Warp By Vector on ``displacement`` shows each)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    entries, made = [], []
+    for k, (points, disp, rot) in enumerate(shapes, start=1):
+        path = write_beam_vtu(out_dir / f"{stem}_{k:02d}.vtu", points,
+                              point_data={"displacement": disp, "rotation": rot})
+        entries.append((float(k), path.name))
+        made.append(path)
+    made.append(write_pvd(out_dir / "modes.pvd", entries))
+    return made
+
+
+def normalized(disp: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Scale a shape to a largest displacement of 1 (rotation, if it has no displacement)."""
+    scale = float(np.max(np.linalg.norm(disp, axis=1)))
+    if scale <= 1e-12 * max(1.0, float(np.max(np.linalg.norm(rot, axis=1)))):
+        scale = float(np.max(np.linalg.norm(rot, axis=1))) or 1.0
+    return disp / scale, rot / scale
+
+
+def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = "", n_max: int = 6) -> Path:
+    """The first ``n_max`` mode shapes: the reference curve and the displaced one (largest
+    displacement a tenth of the curve's extent), in the plane of the curve's longest extent
+    and the mode's largest displacement across it; torsional modes show their rotation
+    amplitude along the curve."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    k = min(n_max, len(shapes))
+    cols = min(3, k)
+    rows = (k + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.2 * rows), squeeze=False)
+    for ax in axes.ravel()[k:]:
+        ax.set_visible(False)
+    for ax, (points, disp, rot), label in zip(axes.ravel(), shapes[:k], labels[:k]):
+        extent = float(np.max(np.ptp(points, axis=0))) or 1.0
+        dmax = float(np.max(np.linalg.norm(disp, axis=1)))
+        if dmax > 1e-9 * float(np.max(np.linalg.norm(rot, axis=1)) * extent + 1e-300):
+            ext = np.ptp(points, axis=0)
+            a = int(np.argmax(ext))
+            across = np.max(np.abs(disp), axis=0) + 1e-9 * ext
+            across[a] = -1.0
+            b = int(np.argmax(across))
+            if np.max(np.abs(disp[:, b])) < 1e-3 * np.max(np.abs(disp[:, a])):  # an axial mode
+                b = int(np.argsort(ext)[-2])
+            moved = points + 0.1 * extent / dmax * disp
+            ax.plot(points[:, a], points[:, b], color="0.6", lw=1, label="reference")
+            ax.plot(moved[:, a], moved[:, b], color="C0", lw=1.5, label="mode")
+            ax.set_xlabel(f"x{a + 1} [m]", fontsize=8), ax.set_ylabel(f"x{b + 1} [m]", fontsize=8)
+            ax.set_aspect("equal", adjustable="datalim")
+        else:
+            s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+            ax.plot(s, rot, lw=1.2)
+            ax.set_xlabel("s [m]", fontsize=8), ax.set_ylabel("rotation [-]", fontsize=8)
+        ax.set_title(label, fontsize=9)
+        ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
