@@ -378,7 +378,9 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         balance = EnergyBalance(sim.conserved, stats, e0, scene.guard.energy_balance,
                                 scale=resume["meta"].get("energy_scale", 0.0) if resume is not None else 0.0)
     quantities = {}
-    for q in scene.output.quantities:  # the run's own quantities need its work of the loads
+    # the scene's quantities, then those the plugin records for its own keys (beams: output.points)
+    wanted = list(scene.output.quantities) + [q for q in sim.diagnostics if q not in scene.output.quantities]
+    for q in wanted:  # the run's own quantities need its work of the loads
         if q == "energy_balance" and balance is not None:
             quantities[q] = balance.evaluate
         elif q == "work" and balance is not None:
@@ -394,7 +396,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         from .io.hdf5 import Hdf5Writer
 
         attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
-        h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, sim.to_arrays, attrs, append=resume is not None)
+        snap = sim.to_arrays if sim.fields is None else (lambda y: {**sim.to_arrays(y), **sim.fields(y)})
+        h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, snap, attrs, append=resume is not None)
         if resume is not None:
             h5.truncate_after(t0 + 1e-9 * every)
         observers.append(h5)

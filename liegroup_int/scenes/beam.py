@@ -18,6 +18,7 @@ from ..problems.beam import (
     SectionConstants,
 )
 from ..problems.beam.damping import size_kelvin_voigt
+from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
 from .schema import Key, SceneError, non_negative, positive
@@ -41,6 +42,11 @@ def _end_keys(end: str) -> list[Key]:
         Key(f"loads.{end}.ramp", "float", 1.0, "ramp duration (ramp)", "s", positive),
         Key(f"loads.{end}.table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
     ]
+
+
+def _fractions(values) -> str | None:
+    """``output.points``: fractions of the length in [0, 1]."""
+    return None if all(0.0 <= v <= 1.0 for v in values) else "fractions of the length in [0, 1]"
 
 
 KEYS = {
@@ -101,11 +107,16 @@ KEYS = {
         Key("initial.velocity", "vec3", ZERO, "uniform initial velocity", "m/s"),
         Key("initial.omega", "vec3", ZERO, "initial rigid angular velocity (spatial)", "rad/s"),
         Key("initial.axis_point", "vec3", ZERO, "point on the axis of the initial rigid rotation", "m"),
+        Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
+            "(columns s0p5_x, s0p5_y, s0p5_z for 0.5), e.g. [0.5, 1.0]", "", _fractions),
+        Key("output.fields", "strs", (), "section quantities at the collocation points, in results.h5 snapshots "
+            "(section_<name>) and ParaView point data: strains Gamma, K; resultants N, M (material), n, m (spatial); "
+            "velocity, angular_velocity", choices=SECTION_FIELDS),
     ]
 }
 
 QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error", "energy_balance",
-              "work")
+              "work", "reactions")
 COLUMNS = {
     "tip": ["tip_x", "tip_y", "tip_z"],
     "momentum": ["p_x", "p_y", "p_z"],
@@ -270,12 +281,36 @@ def check(scene: Scene) -> None:
         pb.initial_state()
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
+    if "reactions" in scene.output.quantities and not pb.supports():
+        raise SceneError(f"{scene.source}: key 'output.quantities': 'reactions' needs a clamped or hinged end "
+                         f"(bc.start = {scene['bc.start']!r}, bc.end = {scene['bc.end']!r})")
     _checked = (scene, pb)
 
 
-def diagnostics(pb: BeamProblem, names) -> dict:
+def _point_rows(pb: BeamProblem, y0: BeamState, fractions) -> np.ndarray:
+    """Rows of basis values ``(k, n)`` at the parameters where the reference centreline
+    (the initial state's) reaches the given fractions of its length (by chord lengths on
+    a grid of 64 n_ctrl intervals, then linear interpolation of the parameter)."""
+    u = np.linspace(0.0, 1.0, 64 * pb.n + 1)
+    x = pb.space.point_matrix(u) @ np.asarray(y0.c, dtype=float)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
+    return pb.space.point_matrix(np.interp(np.asarray(fractions, float) * s[-1], s, u))
+
+
+def point_columns(fractions) -> list[str]:
+    """History columns of ``output.points``: ``s0p5_x`` for the fraction 0.5 (no dots in
+    column names: CSV readers such as ``numpy.genfromtxt`` drop them)."""
+    return [f"s{f:g}_{a}".replace(".", "p") for f in fractions for a in "xyz"]
+
+
+def reaction_columns(pb: BeamProblem) -> list[str]:
+    return [f"reaction_{end}_{q}" for end in pb.supports() for q in ("fx", "fy", "fz", "cx", "cy", "cz")]
+
+
+def diagnostics(pb: BeamProblem, names, points=None) -> dict:
     """Quantities computed from the state; ``energy_balance`` and ``work`` need the run's
-    work of the loads and are added by the runner (liegroup_int/guards.py)."""
+    work of the loads and are added by the runner (liegroup_int/guards.py). ``points``:
+    basis rows of ``output.points`` (quantity ``points``, recorded when given)."""
     table = {
         "tip": lambda t, y: pb.tip(y),
         "energy": lambda t, y: pb.energy(y, t),
@@ -284,8 +319,12 @@ def diagnostics(pb: BeamProblem, names) -> dict:
         "momentum": lambda t, y: pb.momentum(y)[0],
         "angular_momentum": lambda t, y: pb.momentum(y)[1],
         "orth_error": lambda t, y: pb.orth_error(y),
+        "reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.reactions(y).values()]),
     }
-    return {q: table[q] for q in names if q in table}
+    out = {q: table[q] for q in names if q in table}
+    if points is not None:
+        out["points"] = lambda t, y: (points @ y.c).ravel()
+    return out
 
 
 class ShapeRecorder:
@@ -361,13 +400,19 @@ def build(scene: Scene) -> Simulation:
                            "length": pb.space.length, "C_star": 4.0,
                            "kelvin_voigt": pb.tau},
         **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
-        "columns": {k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
+        "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
+                    **({"reactions": reaction_columns(pb)} if "reactions" in scene.output.quantities else {}),
+                    **({"points": point_columns(scene["output.points"])} if scene["output.points"] else {})},
     }
-    sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities),
+    fields = tuple(scene["output.fields"])
+    points = _point_rows(pb, y0, scene["output.points"]) if scene["output.points"] else None
+    sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities, points),
                      final_state=final_state, info=info, snapshot=ShapeRecorder(pb.space),
                      to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a),
                      conserved=pb.mechanical_energy, stability=stability(scene, pb),
-                     frames=_frames(pb), mode_shape=_mode_shape(pb, y0))
+                     frames=_frames(pb, fields), mode_shape=_mode_shape(pb, y0),
+                     fields=(lambda y: {f"section_{k}": v for k, v in pb.section_fields(y, fields).items()})
+                     if fields else None)
     return sim
 
 
@@ -389,10 +434,12 @@ def _mode_shape(pb: BeamProblem, y0, n_points: int = 101):
     return shape
 
 
-def _frames(pb: BeamProblem):
-    """Centreline at the collocation points, their section frames and arc lengths
-    (``Simulation.frames``, the ParaView series)."""
+def _frames(pb: BeamProblem, fields=()):
+    """Centreline at the collocation points, their section frames, arc lengths and the
+    requested section ``fields`` (``Simulation.frames``, the ParaView series)."""
     N0, s_c = np.asarray(pb.space.N0), np.asarray(pb.space.s_c, dtype=float)
+    if fields:
+        return lambda y: (N0 @ y.c, y.R, {"s": s_c, **pb.section_fields(y, fields)})
     return lambda y: (N0 @ y.c, y.R, {"s": s_c})
 
 

@@ -147,6 +147,9 @@ class Simulation:
         ``frames(y) -> (points (m, 3), frames (m, 3, 3), point_data)``: a curve with
         section frames, written as a ParaView series when the scene asks for it
         (``output.paraview``); ``None``: the problem has no such picture.
+    fields : callable, optional
+        ``fields(y) -> {name: array}``: quantities the scene asked for beyond the state
+        (beams: ``output.fields``), stored with the state snapshots in results.h5.
     mode_shape : callable, optional
         ``mode_shape(vector) -> (points (k, 3), displacement (k, 3), rotation (k, 3))``: a
         mode of the linearized increment map (complex, increment-shaped; its real part)
@@ -165,6 +168,7 @@ class Simulation:
     stability: Stability | None = None
     frames: Callable[[Any], tuple] | None = None
     mode_shape: Callable[[Any], tuple] | None = None
+    fields: Callable[[Any], dict] | None = None
 
 
 @dataclass(frozen=True)

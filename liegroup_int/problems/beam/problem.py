@@ -54,6 +54,10 @@ class BeamState:
         return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K, "K_s": self.K_s}
 
 
+#: Section quantities :meth:`BeamProblem.section_fields` computes (``output.fields``).
+SECTION_FIELDS = ("Gamma", "K", "N", "M", "n", "m", "velocity", "angular_velocity")
+
+
 @dataclass(frozen=True)
 class _End:
     """Precomputed data of one end: row index, outward normal, Neumann factor, loads."""
@@ -449,6 +453,55 @@ class BeamProblem(Problem):
         """Largest ``|R^T R - I|`` (Frobenius) over the collocation points."""
         E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)
         return float(np.sqrt(np.max(np.einsum("nij,nij->n", E, E))))
+
+    def section_fields(self, y: BeamState, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
+        """Section quantities at the collocation points, ``(n, 3)`` each, only those in
+        ``names`` (:data:`SECTION_FIELDS`):
+
+        * ``Gamma = R^T c_s - Gamma0`` and ``K`` (``K - K0``): material strains;
+        * ``N = C_N (Gamma + tau dGamma/dt)``, ``M = C_M (K - K0 + tau dK/dt)``: material
+          resultants (with the Kelvin-Voigt part when ``tau > 0``, as the balance laws);
+        * ``n = R N``, ``m = R M``: spatial resultants (force and moment exerted on the part
+          ``s' < s`` by the part ``s' > s``);
+        * ``velocity``, ``angular_velocity``: spatial, at the points.
+        """
+        want = set(names)
+        unknown = want - set(SECTION_FIELDS)
+        if unknown:
+            raise ValueError(f"unknown section field(s) {sorted(unknown)}; known: {', '.join(SECTION_FIELDS)}")
+        out: dict[str, np.ndarray] = {}
+        R = y.R
+        need_strain = want & {"Gamma", "N", "n", "K", "M", "m"}
+        if need_strain:
+            c_s = self.N1 @ y.c
+            _, gam, _ = strains(R, c_s, self.N2 @ y.c, y.K, self.gamma0)
+            KM = y.K - self.K0
+            if self.tau > 0.0:
+                gam_t, K_t = strain_rates(R, c_s, self.N1 @ y.v, self.N0 @ y.w, self.N1 @ y.w)
+                N, M = self.CN * (gam + self.tau * gam_t), self.CM * (KM + self.tau * K_t)
+            else:
+                N, M = self.CN * gam, self.CM * KM
+            fields = {"Gamma": gam, "K": KM, "N": N, "M": M, "n": rot(R, N), "m": rot(R, M)}
+            out.update({k: v for k, v in fields.items() if k in want})
+        if "velocity" in want:
+            out["velocity"] = self.N0 @ y.v
+        if "angular_velocity" in want:
+            out["angular_velocity"] = self.N0 @ y.w
+        return {k: out[k] for k in names if k in out}
+
+    def supports(self) -> dict[str, int]:
+        """The supported ends (clamped or hinged): ``{"start" | "end": collocation index}``."""
+        return {("start" if e.normal < 0 else "end"): e.index for e in self.ends if e.fix_position}
+
+    def reactions(self, y: BeamState) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Force and couple the supports exert on the beam, ``{"start" | "end": (f (3,),
+        c (3,))}``: the end resultants with the outward normal, ``f = nu n``, ``c = nu m``
+        (``nu = -1`` at ``s = 0``, ``+1`` at ``s = L``), from :meth:`section_fields` at the end
+        collocation points (the ends are Greville points). A hinge takes no couple: ``c`` is
+        then the discrete end moment, zero up to the collocation's error."""
+        f = self.section_fields(y, ("n", "m"))
+        return {("start" if e.normal < 0 else "end"): (e.normal * f["n"][e.index], e.normal * f["m"][e.index])
+                for e in self.ends if e.fix_position}
 
     def centreline(self, y: BeamState, u: np.ndarray) -> np.ndarray:
         """Centroid positions at parameters ``u``, ``(m, 3)``."""
