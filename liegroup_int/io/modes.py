@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .paraview import write_beam_vtu, write_pvd
+from .plots import _pyplot, save_figure
 
 #: Names of the displacement and rotation components, for the dominant-component label.
 _COMPONENTS = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
@@ -65,11 +66,7 @@ def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = 
     displacement a tenth of the curve's extent), in the plane of the curve's longest extent
     and the mode's largest displacement across it; torsional modes show their rotation
     amplitude along the curve."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     k = min(n_max, len(shapes))
     cols = min(3, k)
     rows = (k + cols - 1) // cols
@@ -98,9 +95,4 @@ def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = 
             ax.set_xlabel("s [m]", fontsize=8), ax.set_ylabel("rotation [-]", fontsize=8)
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, title)

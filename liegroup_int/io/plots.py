@@ -16,6 +16,18 @@ def _pyplot():
     return plt
 
 
+def save_figure(fig, path: Path, title: str = "") -> Path:
+    """Title, tight layout, PNG/PDF at 110 dpi, and the figure closed."""
+    import matplotlib.pyplot as plt
+
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
 #: Axis labels with units of the recorded quantities (history column groups).
 UNITS = {"tip": "tip position [m]", "work": "work of the loads [J]",
          "energy_balance": "E_kin + E_strain - W - E0 [J]", "kinetic": "kinetic energy [J]",
@@ -65,12 +77,7 @@ def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "", en
         ax.legend(loc="best", fontsize=8)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("t [s]")
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, title)
 
 
 def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int = 6, title: str = "") -> Path:
@@ -101,12 +108,7 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     ax2.set_xlabel(f"x{a + 1} [m]"), ax2.set_ylabel(f"x{b + 1} [m]")
     ax2.set_aspect("equal", adjustable="datalim")
     ax2.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path, title)
 
 
 def plot_run(run_dir: Path, times=None, formats=("png", "pdf")) -> list[Path]:
