@@ -33,8 +33,11 @@ def _int_between(lo, hi):
 def _end_keys(end: str) -> list[Key]:
     at = "s = 0" if end == "start" else "s = L"
     return [
-        Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load)", "N"),
-        Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial)", "N m"),
+        Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load; material frame if follower)",
+            "N"),
+        Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial; material frame if follower)", "N m"),
+        Key(f"loads.{end}.follower", "bool", False, f"the force and couple at {at} turn with the end section "
+            "(components in its frame d1, d2, d3; non-conservative)"),
         Key(f"loads.{end}.profile", "str", "constant", f"time profile of the {end} loads",
             choices=("constant", "step", "ramp", "smooth", "table")),
         Key(f"loads.{end}.t_on", "float", 0.0, "profile switch-on time (step, ramp)", "s", non_negative),
@@ -207,7 +210,8 @@ def _profile(scene: Scene, pre: str) -> Profile:
 def _end_load(scene: Scene, end: str) -> EndLoad:
     pre = f"loads.{end}"
     prof = _profile(scene, pre)
-    return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof)
+    return EndLoad(force=scene[f"{pre}.force"], couple=scene[f"{pre}.couple"], force_profile=prof, couple_profile=prof,
+                   follower=scene[f"{pre}.follower"])
 
 
 def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:

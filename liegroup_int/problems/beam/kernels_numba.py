@@ -99,7 +99,7 @@ _P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU, _P_POW
 _N_PRM = 21
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
-_NEI, _NEF = 5, 8
+_NEI, _NEF = 6, 8
 
 
 # ====================================================================== scalar helpers
@@ -624,18 +624,21 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
-            if power:  # dead end loads (zero where absent) on the end velocities
-                power_sum += (endf[e, 2] * vc0 + endf[e, 3] * vc1 + endf[e, 4] * vc2
-                              + endf[e, 5] * wc0 + endf[e, 6] * wc1 + endf[e, 7] * wc2)
+            lf0, lf1, lf2, m0, m1, m2 = endf[e, 2], endf[e, 3], endf[e, 4], endf[e, 5], endf[e, 6], endf[e, 7]
+            if endi[e, 5] != 0:  # follower loads: material components, turned by R
+                lf0, lf1, lf2 = (r00 * lf0 + r01 * lf1 + r02 * lf2, r10 * lf0 + r11 * lf1 + r12 * lf2,
+                                 r20 * lf0 + r21 * lf1 + r22 * lf2)
+                m0, m1, m2 = r00 * m0 + r01 * m1 + r02 * m2, r10 * m0 + r11 * m1 + r12 * m2, r20 * m0 + r21 * m1 + r22 * m2
+            if power:  # end loads (zero where absent) on the end velocities
+                power_sum += lf0 * vc0 + lf1 * vc1 + lf2 * vc2 + m0 * wc0 + m1 * wc1 + m2 * wc2
             if endi[e, 3] != 0:
                 rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
                 rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
                 rn2 = r20 * N0_ + r21 * N1_ + r22 * N2_
-                ns0 += fac * (endf[e, 2] - nrm * rn0)
-                ns1 += fac * (endf[e, 3] - nrm * rn1)
-                ns2 += fac * (endf[e, 4] - nrm * rn2)
+                ns0 += fac * (lf0 - nrm * rn0)
+                ns1 += fac * (lf1 - nrm * rn1)
+                ns2 += fac * (lf2 - nrm * rn2)
             if endi[e, 4] != 0:
-                m0, m1, m2 = endf[e, 5], endf[e, 6], endf[e, 7]
                 mc0 = r00 * m0 + r10 * m1 + r20 * m2
                 mc1 = r01 * m0 + r11 * m1 + r21 * m2
                 mc2 = r02 * m0 + r12 * m1 + r22 * m2
@@ -811,18 +814,21 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
-            if power:  # dead end loads (zero where absent) on the end velocities
-                power_sum += (endf[e, 2] * vc0 + endf[e, 3] * vc1 + endf[e, 4] * vc2
-                              + endf[e, 5] * wc0 + endf[e, 6] * wc1 + endf[e, 7] * wc2)
+            lf0, lf1, lf2, m0, m1, m2 = endf[e, 2], endf[e, 3], endf[e, 4], endf[e, 5], endf[e, 6], endf[e, 7]
+            if endi[e, 5] != 0:  # follower loads: material components, turned by R
+                lf0, lf1, lf2 = (r00 * lf0 + r01 * lf1 + r02 * lf2, r10 * lf0 + r11 * lf1 + r12 * lf2,
+                                 r20 * lf0 + r21 * lf1 + r22 * lf2)
+                m0, m1, m2 = r00 * m0 + r01 * m1 + r02 * m2, r10 * m0 + r11 * m1 + r12 * m2, r20 * m0 + r21 * m1 + r22 * m2
+            if power:  # end loads (zero where absent) on the end velocities
+                power_sum += lf0 * vc0 + lf1 * vc1 + lf2 * vc2 + m0 * wc0 + m1 * wc1 + m2 * wc2
             if endi[e, 3] != 0:
                 rn0 = r00 * N0_ + r01 * N1_ + r02 * N2_
                 rn1 = r10 * N0_ + r11 * N1_ + r12 * N2_
                 rn2 = r20 * N0_ + r21 * N1_ + r22 * N2_
-                ns0 += fac * (endf[e, 2] - nrm * rn0)
-                ns1 += fac * (endf[e, 3] - nrm * rn1)
-                ns2 += fac * (endf[e, 4] - nrm * rn2)
+                ns0 += fac * (lf0 - nrm * rn0)
+                ns1 += fac * (lf1 - nrm * rn1)
+                ns2 += fac * (lf2 - nrm * rn2)
             if endi[e, 4] != 0:
-                m0, m1, m2 = endf[e, 5], endf[e, 6], endf[e, 7]
                 tq0 += fac * ((r00 * m0 + r10 * m1 + r20 * m2) - nrm * M0_)
                 tq1 += fac * ((r01 * m0 + r11 * m1 + r21 * m2) - nrm * M1_)
                 tq2 += fac * ((r02 * m0 + r12 * m1 + r22 * m2) - nrm * M2_)
@@ -1163,7 +1169,7 @@ class NumbaBeamKernels:
         endf = np.zeros((ne, _NEF))
         profiles = []  # (row, first column, base vector, profile) of non-constant loads
         for k, e in enumerate(ends):
-            endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann)
+            endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann, e.load.follower)
             endf[k, 0], endf[k, 1] = e.normal, e.factor
             ld = e.load
             for col, vec, prof, on in ((2, ld.force, ld.force_profile, e.force_neumann),

@@ -204,12 +204,16 @@ class Profile:
 
 @dataclass(frozen=True)
 class EndLoad:
-    """Force and couple applied at one end (spatial, dead loads) with a time profile."""
+    """Force and couple applied at one end with a time profile: dead loads (spatial
+    components, fixed in space) or, with ``follower``, loads that turn with the end section
+    (components in the section's material frame ``d1, d2, d3``: the spatial load is
+    ``R(end) (force, couple)``, non-conservative)."""
 
     force: tuple = (0.0, 0.0, 0.0)
     couple: tuple = (0.0, 0.0, 0.0)
     force_profile: Profile = field(default_factory=Profile)
     couple_profile: Profile = field(default_factory=Profile)
+    follower: bool = False
 
     @property
     def active(self) -> bool:

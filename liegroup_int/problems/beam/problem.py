@@ -349,10 +349,10 @@ class BeamProblem(Problem):
         for e in self.neumann_ends:
             i, ld = e.index, e.load
             if e.force_neumann:
-                n_c = np.asarray(ld.force, float) * ld.force_profile(t) if np.any(ld.force) else 0.0
+                n_c = self._end_force(ld, t, R[i]) if np.any(ld.force) else 0.0
                 n_s[i] += e.factor * (n_c - e.normal * (R[i] @ N[i]))
             if e.moment_neumann:
-                m_c = R[i].T @ (np.asarray(ld.couple, float) * ld.couple_profile(t)) if np.any(ld.couple) else 0.0
+                m_c = R[i].T @ self._end_couple(ld, t, R[i]) if np.any(ld.couple) else 0.0
                 tq[i] += e.factor * (m_c - e.normal * M[i])
         rhs = np.empty((self.n, 4, 3))
         rhs[:, 0] = self.N0 @ y.v
@@ -360,6 +360,18 @@ class BeamProblem(Problem):
         rhs[:, 2] = n_s / self.mu
         rhs[:, 3] = rot(R, tq / self.Jm)
         return rhs
+
+    @staticmethod
+    def _end_force(ld, t: float, R_end: np.ndarray) -> np.ndarray:
+        """Spatial end force at ``t``: dead, or turned by the end rotation (follower)."""
+        f = np.asarray(ld.force, float) * ld.force_profile(t)
+        return R_end @ f if ld.follower else f
+
+    @staticmethod
+    def _end_couple(ld, t: float, R_end: np.ndarray) -> np.ndarray:
+        """Spatial end couple at ``t``: dead, or turned by the end rotation (follower)."""
+        m = np.asarray(ld.couple, float) * ld.couple_profile(t)
+        return R_end @ m if ld.follower else m
 
     def _add_strain_rates(self, y, R, K, c_s, c_ss, w_c, gam, gam_s, KM, KM_s):
         """``(Gamma, Gamma_s, K_M, K_M,s) + tau * d/dt(...)`` at the collocation points.
@@ -384,7 +396,8 @@ class BeamProblem(Problem):
         ``P = f_d(t) int (q . v + m_d . omega) ds + sum_ends (F(t) . v + M(t) . omega)
         - tau int (dGamma . C_N dGamma + dK . C_M dK) ds``
         with the distributed force ``q`` (gravity included) and couple ``m_d``, their
-        profile ``f_d``, the dead end forces ``F`` and couples ``M`` at Neumann ends,
+        profile ``f_d``, the end forces ``F`` and couples ``M`` at Neumann ends (spatial:
+        follower loads turned by the end rotation),
         spatial velocities, and the Kelvin-Voigt strain rates; ``int ds`` by the
         collocation quadrature (exact on the trial space).
         """
@@ -400,10 +413,11 @@ class BeamProblem(Problem):
                 p += f * float(self.m_dist @ (self.quad @ (self.N0 @ y.w)))
         for e in self.neumann_ends:
             ld = e.load
+            R_end = y.R[e.index]  # the end is a collocation point
             if e.force_neumann and np.any(ld.force):
-                p += ld.force_profile(t) * float(np.dot(ld.force, y.v[e.index]))
+                p += float(np.dot(self._end_force(ld, t, R_end), y.v[e.index]))
             if e.moment_neumann and np.any(ld.couple):
-                p += ld.couple_profile(t) * float(np.dot(ld.couple, y.w[e.index]))
+                p += float(np.dot(self._end_couple(ld, t, R_end), y.w[e.index]))
         return p
 
     # ------------------------------------------------------------------ diagnostics
@@ -425,7 +439,7 @@ class BeamProblem(Problem):
         potential = float(self.quad @ pot)
         for e in self.neumann_ends:
             ld = e.load
-            if e.force_neumann and np.any(ld.force) and ld.force_profile.is_constant:
+            if e.force_neumann and np.any(ld.force) and ld.force_profile.is_constant and not ld.follower:
                 potential -= float(np.dot(ld.force, y.c[e.index]))
         return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
 
