@@ -16,8 +16,10 @@ from ..problems.beam import (
     Profile,
     Section,
     SectionConstants,
+    SupportMotion,
 )
 from ..problems.beam.damping import size_kelvin_voigt
+from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
@@ -33,13 +35,20 @@ def _int_between(lo, hi):
 def _end_keys(end: str) -> list[Key]:
     at = "s = 0" if end == "start" else "s = L"
     return [
+        Key(f"motion.{end}.kind", "str", "none", f"prescribed rotation of the clamped end at {at}: spin_up "
+            "(Simo & Vu-Quoc 1986, rest to motion.rate over motion.time) or harmonic (amplitude sin(2 pi t / time))",
+            choices=("none", "spin_up", "harmonic")),
+        Key(f"motion.{end}.axis", "vec3", (0.0, 0.0, 1.0), f"axis of the prescribed rotation (through the end at {at})"),
+        Key(f"motion.{end}.rate", "float", 0.0, "final angular speed of a spin_up", "rad/s"),
+        Key(f"motion.{end}.amplitude", "float", 0.0, "amplitude of a harmonic rotation", "rad"),
+        Key(f"motion.{end}.time", "float", 1.0, "spin-up duration, or period of the harmonic rotation", "s", positive),
         Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load; material frame if follower)",
             "N"),
         Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial; material frame if follower)", "N m"),
         Key(f"loads.{end}.follower", "bool", False, f"the force and couple at {at} turn with the end section "
             "(components in its frame d1, d2, d3; non-conservative)"),
         Key(f"loads.{end}.profile", "str", "constant", f"time profile of the {end} loads",
-            choices=("constant", "step", "ramp", "smooth", "table")),
+            choices=PROFILE_KINDS),
         Key(f"loads.{end}.t_on", "float", 0.0, "profile switch-on time (step, ramp)", "s", non_negative),
         Key(f"loads.{end}.t_off", "float", float("inf"), "profile switch-off time (step, ramp)", "s", positive),
         Key(f"loads.{end}.ramp", "float", 1.0, "ramp duration (ramp)", "s", positive),
@@ -100,7 +109,7 @@ KEYS = {
         Key("loads.distributed_force", "vec3", ZERO, "force per length, spatial", "N/m"),
         Key("loads.distributed_couple", "vec3", ZERO, "couple per length, spatial", "N m/m"),
         Key("loads.profile", "str", "constant", "time profile of the distributed loads (and gravity)",
-            choices=("constant", "step", "ramp", "smooth", "table")),
+            choices=PROFILE_KINDS),
         Key("loads.t_on", "float", 0.0, "distributed-load profile switch-on time", "s", non_negative),
         Key("loads.t_off", "float", float("inf"), "distributed-load profile switch-off time", "s", positive),
         Key("loads.ramp", "float", 1.0, "distributed-load ramp duration (ramp, smooth)", "s", positive),
@@ -207,6 +216,17 @@ def _profile(scene: Scene, pre: str) -> Profile:
         raise SceneError(f"{scene.source}: key '{pre}.{exc.field}': {exc.reason}") from None
 
 
+def _motion(scene: Scene, end: str) -> SupportMotion | None:
+    pre = f"motion.{end}"
+    if scene[f"{pre}.kind"] == "none":
+        return None
+    try:
+        return SupportMotion(scene[f"{pre}.kind"], scene[f"{pre}.axis"], scene[f"{pre}.rate"], scene[f"{pre}.amplitude"],
+                             scene[f"{pre}.time"])
+    except ParameterError as exc:
+        raise SceneError(f"{scene.source}: key '{pre}.{exc.field}': {exc.reason}") from None
+
+
 def _end_load(scene: Scene, end: str) -> EndLoad:
     pre = f"loads.{end}"
     prof = _profile(scene, pre)
@@ -247,7 +267,11 @@ def _undamped(scene: Scene) -> BeamProblem:
                   distributed_couple=scene["loads.distributed_couple"],
                   distributed_profile=_profile(scene, "loads"), start=_end_load(scene, "start"),
                   end=_end_load(scene, "end"))
-    bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"])
+    try:
+        bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"], _motion(scene, "start"), _motion(scene, "end"))
+    except ParameterError as exc:
+        end = "start" if exc.field.startswith("start") else "end"
+        raise SceneError(f"{scene.source}: key 'motion.{end}.kind': {exc.reason}") from None
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
     try:

@@ -10,11 +10,12 @@ from .model import (
     Profile,
     Section,
     SectionConstants,
+    SupportMotion,
 )
 from .problem import BeamProblem, BeamState, quadrature_weights
 
 __all__ = [
     "BeamProblem", "BeamState", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
-    "BoundaryConditions", "InitialConditions", "curvature_update", "jr_times",
+    "BoundaryConditions", "SupportMotion", "InitialConditions", "curvature_update", "jr_times",
     "jr_theta_s_derivative", "strains", "quadrature_weights",
 ]

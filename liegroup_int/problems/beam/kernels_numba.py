@@ -99,7 +99,7 @@ _P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU, _P_POW
 _N_PRM = 21
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
-_NEI, _NEF = 6, 8
+_NEI, _NEF = 7, 8
 
 
 # ====================================================================== scalar helpers
@@ -620,10 +620,17 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
         if power and (has_q or has_m):  # int (q . v + m_d . omega) ds by the collocation quadrature
             power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
         # enhanced collocation at Neumann ends
+        moving = -1
         for e in range(ne):
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 6] != 0:  # a moving support: prescribed angular acceleration in endf[e, 2:5]
+                moving = e
+                if power:  # the support's couple nrm m on the end's angular velocity
+                    power_sum += nrm * ((r00 * M0_ + r01 * M1_ + r02 * M2_) * wc0 + (r10 * M0_ + r11 * M1_ + r12 * M2_) * wc1
+                                        + (r20 * M0_ + r21 * M1_ + r22 * M2_) * wc2)
+                continue
             lf0, lf1, lf2, m0, m1, m2 = endf[e, 2], endf[e, 3], endf[e, 4], endf[e, 5], endf[e, 6], endf[e, 7]
             if endi[e, 5] != 0:  # follower loads: material components, turned by R
                 lf0, lf1, lf2 = (r00 * lf0 + r01 * lf1 + r02 * lf2, r10 * lf0 + r11 * lf1 + r12 * lf2,
@@ -665,6 +672,8 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
             x[i, 9] = r00 * z0 + r01 * z1 + r02 * z2
             x[i, 10] = r10 * z0 + r11 * z1 + r12 * z2
             x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
+            if moving >= 0:
+                x[i, 9], x[i, 10], x[i, 11] = endf[moving, 2], endf[moving, 3], endf[moving, 4]
         if not dense:  # forward sweep of the banded solve, fused (rows < i are final)
             _forward_row(x, i, lu, lower)
     _finish_solve(x, lu, lower, si[_H_U], minv, dense, True, out)
@@ -810,10 +819,17 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
             tq2 += r02 * mx + r12 * my + r22 * mz
         if power and (has_q or has_m):  # int (q . v + m_d . omega) ds by the collocation quadrature
             power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
+        moving = -1
         for e in range(ne):  # enhanced collocation at Neumann ends
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 6] != 0:  # a moving support: prescribed angular acceleration in endf[e, 2:5]
+                moving = e
+                if power:  # the support's couple nrm m on the end's angular velocity
+                    power_sum += nrm * ((r00 * M0_ + r01 * M1_ + r02 * M2_) * wc0 + (r10 * M0_ + r11 * M1_ + r12 * M2_) * wc1
+                                        + (r20 * M0_ + r21 * M1_ + r22 * M2_) * wc2)
+                continue
             lf0, lf1, lf2, m0, m1, m2 = endf[e, 2], endf[e, 3], endf[e, 4], endf[e, 5], endf[e, 6], endf[e, 7]
             if endi[e, 5] != 0:  # follower loads: material components, turned by R
                 lf0, lf1, lf2 = (r00 * lf0 + r01 * lf1 + r02 * lf2, r10 * lf0 + r11 * lf1 + r12 * lf2,
@@ -851,6 +867,8 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
             x[i, 9] = r00 * z0 + r01 * z1 + r02 * z2
             x[i, 10] = r10 * z0 + r11 * z1 + r12 * z2
             x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
+            if moving >= 0:
+                x[i, 9], x[i, 10], x[i, 11] = endf[moving, 2], endf[moving, 3], endf[moving, 4]
         if not dense:
             _forward_row(x, i, lu, lower)
     _finish_solve(x, lu, lower, upper, minv, dense, True, out)
@@ -882,7 +900,7 @@ def rotation_angle_kernel(u, sf, si):
 # ====================================================================== time profiles of loads
 # Load-profile encoding (one row per time-dependent load, see :func:`profile_row`):
 # kind code, t_on, t_off, ramp, number of table points m, table times (m), factors (m).
-_PROFILE_KINDS = {"constant": 0, "step": 1, "ramp": 2, "smooth": 3, "table": 4}
+_PROFILE_KINDS = {"constant": 0, "step": 1, "ramp": 2, "smooth": 3, "table": 4, "raised_cosine": 5, "sine": 6}
 _PR_KIND, _PR_ON, _PR_OFF, _PR_RAMP, _PR_M, _PR_TABLE = 0, 1, 2, 3, 4, 5
 
 
@@ -923,6 +941,11 @@ def profile_value(row, t):
         return 0.0
     if kind == 1:
         return 1.0
+    if kind == 6:
+        return math.sin(2.0 * math.pi * (t - row[_PR_ON]) / row[_PR_RAMP])
+    if kind == 5:
+        y = (t - row[_PR_ON]) / row[_PR_RAMP]
+        return 1.0 - math.cos(2.0 * math.pi * y) if y < 1.0 else 0.0
     x = min(1.0, (t - row[_PR_ON]) / row[_PR_RAMP])
     if kind == 2:
         return x
@@ -1169,8 +1192,14 @@ class NumbaBeamKernels:
         endf = np.zeros((ne, _NEF))
         profiles = []  # (row, first column, base vector, profile) of non-constant loads
         for k, e in enumerate(ends):
-            endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann, e.load.follower)
+            endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann, e.load.follower,
+                       e.motion is not None)
             endf[k, 0], endf[k, 1] = e.normal, e.factor
+            if e.motion is not None:  # prescribed angular acceleration, per stage time
+                scale, prof = e.motion.acceleration_profile()
+                a = scale * e.motion.unit_axis
+                endf[k, 2:5] = a * prof(0.0)
+                profiles.append((k, 2, a, prof))
             ld = e.load
             for col, vec, prof, on in ((2, ld.force, ld.force_profile, e.force_neumann),
                                        (5, ld.couple, ld.couple_profile, e.moment_neumann)):
@@ -1312,7 +1341,7 @@ def dirichlet_rows(sf, si):
     fixp = np.zeros(n, dtype=np.bool_)
     fixr = np.zeros(n, dtype=np.bool_)
     fixp[endi[endi[:, 1] != 0, 0]] = True
-    fixr[endi[endi[:, 2] != 0, 0]] = True
+    fixr[endi[(endi[:, 2] != 0) & (endi[:, 6] == 0), 0]] = True  # moving supports: prescribed rows
     return fixp, fixr
 
 

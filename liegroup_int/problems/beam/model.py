@@ -153,19 +153,26 @@ class SectionConstants:
         )
 
 
+#: Kinds of :class:`Profile`.
+PROFILE_KINDS = ("constant", "step", "ramp", "smooth", "table", "raised_cosine", "sine")
+
+
 @dataclass(frozen=True)
 class Profile:
     """Scalar time profile multiplying a load vector.
 
     Parameters
     ----------
-    kind : {"constant", "step", "ramp", "smooth", "table"}
+    kind : {"constant", "step", "ramp", "smooth", "table", "raised_cosine", "sine"}
         ``constant``: 1; ``step``: 1 for ``t_on <= t < t_off``, else 0; ``ramp``: rises
         linearly from 0 at ``t_on`` to 1 at ``t_on + ramp``, then stays (and drops to 0 at
         ``t_off``); ``smooth``: like ``ramp`` but ``sin^2(pi/2 x)`` with
         ``x = (t - t_on)/ramp`` (zero slope at both ends, so it hardly excites the top of
         the spectrum); ``table``: piecewise linear through ``table`` points
-        ``(t, factor)``, constant beyond its ends.
+        ``(t, factor)``, constant beyond its ends; ``raised_cosine``: ``1 - cos(2 pi x)``
+        for ``0 <= x < 1`` with ``x = (t - t_on)/ramp``, else 0 (a smooth pulse; the
+        angular acceleration of a spin-up); ``sine``: ``sin(2 pi (t - t_on)/ramp)`` for
+        ``t_on <= t < t_off`` (period ``ramp``).
     """
 
     kind: str = "constant"
@@ -175,9 +182,9 @@ class Profile:
     table: tuple = ()
 
     def __post_init__(self):
-        if self.kind not in ("constant", "step", "ramp", "smooth", "table"):
-            raise ParameterError("profile", f"expected constant, step, ramp, smooth or table, got {self.kind!r}")
-        if self.kind in ("ramp", "smooth") and not self.ramp > 0:
+        if self.kind not in PROFILE_KINDS:
+            raise ParameterError("profile", f"expected one of {', '.join(PROFILE_KINDS)}, got {self.kind!r}")
+        if self.kind in ("ramp", "smooth", "raised_cosine", "sine") and not self.ramp > 0:
             raise ParameterError("ramp", f"expected a positive ramp duration, got {self.ramp!r}")
         if self.kind == "table" and len(self.table) < 2:
             raise ParameterError("table", "expected at least two (t, factor) points")
@@ -194,6 +201,11 @@ class Profile:
             return 0.0
         if self.kind == "step":
             return 1.0
+        if self.kind == "sine":
+            return float(np.sin(2 * np.pi * (t - self.t_on) / self.ramp))
+        if self.kind == "raised_cosine":
+            x = (t - self.t_on) / self.ramp
+            return float(1.0 - np.cos(2 * np.pi * x)) if x < 1.0 else 0.0
         x = min(1.0, (t - self.t_on) / self.ramp)
         return x if self.kind == "ramp" else float(np.sin(0.5 * np.pi * x) ** 2)
 
@@ -247,17 +259,88 @@ class Loads:
 
 
 @dataclass(frozen=True)
+class SupportMotion:
+    """A prescribed rotation ``theta(t)`` of a clamped end about a fixed spatial ``axis``
+    through the end's position: ``R(end, t) = exp(theta(t) hat(a)) R(end, 0)``, angular
+    velocity ``theta'(t) a`` and acceleration ``theta''(t) a`` (``a = axis / |axis|``).
+
+    Kinds:
+
+    * ``spin_up`` (Simo & Vu-Quoc 1986): ``theta = (rate / time) (t^2 / 2 + (time / 2 pi)^2
+      (cos(2 pi t / time) - 1))`` for ``t < time``, then ``rate (t - time / 2)``: from rest
+      to the angular speed ``rate`` [rad/s] with zero angular acceleration at both ends of
+      the spin-up;
+    * ``harmonic``: ``theta = amplitude sin(2 pi t / time)`` [rad].
+    """
+
+    kind: str = "spin_up"
+    axis: tuple = (0.0, 0.0, 1.0)
+    rate: float = 0.0
+    amplitude: float = 0.0
+    time: float = 1.0
+
+    def __post_init__(self):
+        if self.kind not in ("spin_up", "harmonic"):
+            raise ParameterError("kind", f"expected 'spin_up' or 'harmonic', got {self.kind!r}")
+        if not np.linalg.norm(self.axis) > 0:
+            raise ParameterError("axis", "expected a non-zero vector")
+        if not self.time > 0:
+            raise ParameterError("time", f"expected a positive duration, got {self.time!r}")
+
+    @property
+    def unit_axis(self) -> np.ndarray:
+        a = np.asarray(self.axis, dtype=float)
+        return a / np.linalg.norm(a)
+
+    def angle(self, t: float) -> float:
+        """``theta(t)`` [rad]."""
+        T = self.time
+        if self.kind == "harmonic":
+            return self.amplitude * np.sin(2 * pi * t / T)
+        if t < T:
+            return self.rate / T * (0.5 * t * t + (T / (2 * pi)) ** 2 * (np.cos(2 * pi * t / T) - 1.0))
+        return self.rate * (t - 0.5 * T)
+
+    def velocity(self, t: float) -> float:
+        """``theta'(t)`` [rad/s]."""
+        T = self.time
+        if self.kind == "harmonic":
+            return self.amplitude * (2 * pi / T) * np.cos(2 * pi * t / T)
+        if t < T:
+            return self.rate / T * (t - T / (2 * pi) * np.sin(2 * pi * t / T))
+        return self.rate
+
+    def acceleration_profile(self) -> tuple[float, "Profile"]:
+        """``theta''(t) = scale * profile(t)``: ``rate / time`` times a raised cosine over
+        the spin-up, or ``-amplitude (2 pi / time)^2`` times a sine."""
+        if self.kind == "harmonic":
+            return -self.amplitude * (2 * pi / self.time) ** 2, Profile("sine", ramp=self.time)
+        return self.rate / self.time, Profile("raised_cosine", ramp=self.time)
+
+    def acceleration(self, t: float) -> float:
+        """``theta''(t)`` [rad/s^2]."""
+        scale, prof = self.acceleration_profile()
+        return scale * prof(t)
+
+
+@dataclass(frozen=True)
 class BoundaryConditions:
     """End conditions: ``clamped`` (position and rotation fixed), ``hinged`` (position
-    fixed, moment-free), ``free`` (force- and moment-free, or loaded)."""
+    fixed, moment-free), ``free`` (force- and moment-free, or loaded); a clamped end may
+    follow a prescribed rotation (``start_motion``, ``end_motion``: :class:`SupportMotion`)."""
 
     start: str = "clamped"
     end: str = "free"
+    start_motion: SupportMotion | None = None
+    end_motion: SupportMotion | None = None
 
     def __post_init__(self):
         for name in ("start", "end"):
             if getattr(self, name) not in END_TYPES:
                 raise ParameterError(name, f"expected one of {', '.join(END_TYPES)}, got {getattr(self, name)!r}")
+            if getattr(self, f"{name}_motion") is not None and getattr(self, name) != "clamped":
+                raise ParameterError(f"{name}_motion", f"a prescribed rotation needs a clamped end, not "
+                                                       f"{getattr(self, name)!r}")
 
 
 @dataclass(frozen=True)

@@ -70,6 +70,7 @@ class _End:
     force_neumann: bool
     moment_neumann: bool
     load: object
+    motion: object = None  # SupportMotion of a clamped end: its rotation rows are prescribed
 
 
 def quadrature_weights(space: CollocationSpace, n_gauss: int = 12) -> np.ndarray:
@@ -157,15 +158,16 @@ class BeamProblem(Problem):
         self.m_dist = np.asarray(loads.distributed_couple, float)
         self.has_m = bool(np.any(self.m_dist))
         self.ends = tuple(
-            e for e in (self._end(0, -1.0, bcs.start, loads.start, space.l_s_start),
-                        self._end(n - 1, 1.0, bcs.end, loads.end, space.l_s_end))
+            e for e in (self._end(0, -1.0, bcs.start, loads.start, space.l_s_start, bcs.start_motion),
+                        self._end(n - 1, 1.0, bcs.end, loads.end, space.l_s_end, bcs.end_motion))
         )
+        self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
         # loads that do work, or viscous dissipation: the drivers then integrate their
         # power (quadrature_rate)
-        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or any(
+        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
             for e in self.neumann_ends))
         # --- backend selection (compiled kernels: kernels_numba.py) -------------------
@@ -197,7 +199,7 @@ class BeamProblem(Problem):
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
-    def _end(index, normal, kind, load, l_s):
+    def _end(index, normal, kind, load, l_s, motion=None):
         if kind == "clamped" and load.active:
             raise ValueError(f"loads.{'start' if normal < 0 else 'end'}: a load on a clamped end does no work; "
                              "remove it or free the end")
@@ -207,7 +209,7 @@ class BeamProblem(Problem):
         return _End(
             index=index, normal=normal, factor=C_STAR / l_s,
             fix_position=kind in ("clamped", "hinged"), fix_rotation=kind == "clamped",
-            force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load,
+            force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load, motion=motion,
         )
 
     def _dirichlet_mask(self) -> np.ndarray:
@@ -217,7 +219,7 @@ class BeamProblem(Problem):
         for e in self.ends:
             if e.fix_position:
                 mask[e.index, [0, 2]] = True
-            if e.fix_rotation:
+            if e.fix_rotation and e.motion is None:  # a moving support: rows set in _rates
                 mask[e.index, [1, 3]] = True
         return mask
 
@@ -231,13 +233,20 @@ class BeamProblem(Problem):
                                                      sp.c0 - np.asarray(ic.axis_point, float))
         v = sp.solve(v_c)
         w = np.tile(omega, (self.n, 1))
-        for e in self.ends:  # supports do not move
+        R = np.array(sp.R0)
+        for e in self.ends:  # supports do not move, unless prescribed
             if e.fix_position and np.any(v[e.index]):
                 raise ValueError(f"initial: the velocity field moves the supported end at s = "
                                  f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
-            if e.fix_rotation and np.any(omega):
+            if e.motion is not None:
+                a = e.motion.unit_axis
+                if np.any(omega) and not np.allclose(omega, e.motion.velocity(0.0) * a, rtol=1e-12, atol=0.0):
+                    raise ValueError("initial.omega: differs from the prescribed rotation rate of the support at t = 0")
+                w[e.index] = e.motion.velocity(0.0) * a
+                R[e.index] = exp_so3(e.motion.angle(0.0) * a) @ R[e.index]
+            elif e.fix_rotation and np.any(omega):
                 raise ValueError("initial.omega: a clamped end cannot rotate")
-        return BeamState(c, v, w, np.array(sp.R0), np.array(self.K0), np.array(self.K0_s))
+        return BeamState(c, v, w, R, np.array(self.K0), np.array(self.K0_s))
 
     # ------------------------------------------------------------------ RKMK contract
     def zero_increment(self, y) -> np.ndarray:
@@ -359,6 +368,8 @@ class BeamProblem(Problem):
         rhs[:, 1] = dexpinv_so3(th_c, w_c)
         rhs[:, 2] = n_s / self.mu
         rhs[:, 3] = rot(R, tq / self.Jm)
+        for e in self.moving_ends:  # prescribed angular acceleration theta''(t) a (spatial)
+            rhs[e.index, 3] = e.motion.acceleration(t) * e.motion.unit_axis
         return rhs
 
     @staticmethod
@@ -411,6 +422,10 @@ class BeamProblem(Problem):
                 p += f * float(self.q @ (self.quad @ (self.N0 @ y.v)))
             if self.has_m:
                 p += f * float(self.m_dist @ (self.quad @ (self.N0 @ y.w)))
+        if self.moving_ends:  # the moving support's couple on the end's angular velocity
+            m = self.section_fields(y, ("m",))["m"]
+            for e in self.moving_ends:
+                p += float(np.dot(e.normal * m[e.index], y.w[e.index]))
         for e in self.neumann_ends:
             ld = e.load
             R_end = y.R[e.index]  # the end is a collocation point
