@@ -2,6 +2,7 @@
 
 from . import beam as _beam  # noqa: F401  (registers the kind)
 from . import rigid_body as _rigid_body  # noqa: F401  (registers the kind)
+from . import rigid_body_se3 as _rigid_body_se3  # noqa: F401  (registers the kind)
 from .registry import builtin_descriptions, builtin_names, builtin_path
 from .scene import (KINDS, GuardSpec, IntegratorSpec, OutputSpec, ProblemKind, Scene, Simulation, Stability, build_scene,
                     load_scene)
