@@ -30,6 +30,17 @@ SPACE = Product(SO3, Rn(3))
 E3 = np.array([0.0, 0.0, 1.0])
 
 
+def check_inertia(inertia) -> None:
+    """Raise :class:`ParameterError` unless ``inertia`` holds three positive principal
+    moments satisfying the triangle inequalities of a physical body."""
+    I = np.asarray(inertia, dtype=float)
+    if I.shape != (3,) or not np.all(I > 0):
+        raise ParameterError("inertia", f"expected three positive principal moments, got {inertia!r}")
+    a, b, c = I
+    if a > b + c or b > a + c or c > a + b:
+        raise ParameterError("inertia", f"{inertia!r} violates the triangle inequality of a rigid body")
+
+
 @dataclass(frozen=True)
 class RigidBody:
     """A rigid body with a fixed point, optionally in uniform gravity.
@@ -54,12 +65,7 @@ class RigidBody:
     space: Product = field(default=SPACE, init=False, repr=False)
 
     def __post_init__(self):
-        I = np.asarray(self.inertia, dtype=float)
-        if I.shape != (3,) or not np.all(I > 0):
-            raise ParameterError("inertia", f"expected three positive principal moments, got {self.inertia!r}")
-        a, b, c = I
-        if a > b + c or b > a + c or c > a + b:
-            raise ParameterError("inertia", f"{self.inertia!r} violates the triangle inequality of a rigid body")
+        check_inertia(self.inertia)
         if not self.mass >= 0:
             raise ParameterError("mass", f"expected >= 0, got {self.mass!r}")
         if np.asarray(self.com, dtype=float).shape != (3,):

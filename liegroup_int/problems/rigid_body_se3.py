@@ -25,6 +25,7 @@ from ..groups import SE3, Product, Rn
 from ..groups.so3 import cross
 from ..integrators import GroupProblem
 from .errors import ParameterError
+from .rigid_body import check_inertia
 
 SPACE = Product(SE3, Rn(6))
 
@@ -51,12 +52,7 @@ class FreeBody:
     def __post_init__(self):
         if not self.mass > 0:
             raise ParameterError("mass", f"expected a positive mass, got {self.mass!r}")
-        I = np.asarray(self.inertia, dtype=float)
-        if I.shape != (3,) or not np.all(I > 0):
-            raise ParameterError("inertia", f"expected three positive principal moments, got {self.inertia!r}")
-        a, b, c = I
-        if a > b + c or b > a + c or c > a + b:
-            raise ParameterError("inertia", f"{self.inertia!r} violates the triangle inequality of a rigid body")
+        check_inertia(self.inertia)
 
     @property
     def _I(self) -> np.ndarray:

@@ -32,10 +32,15 @@ def _body(scene: Scene) -> RigidBody:
         raise SceneError(f"{scene.source}: key 'body.{exc.field}': {exc.reason}") from None
 
 
-def check(scene: Scene) -> None:
-    _body(scene)
+def no_auto_step(scene: Scene) -> None:
+    """Refuse ``integrator.dt = "auto"`` (a stable-step estimate exists for beams only)."""
     if scene.integrator.dt == "auto":
         raise SceneError(f"{scene.source}: key 'integrator.dt' = 'auto': automatic steps are available for beam scenes only")
+
+
+def check(scene: Scene) -> None:
+    _body(scene)
+    no_auto_step(scene)
 
 
 #: Fixed-step runs of fewer stage evaluations than this stay in NumPy: numba's start-up in

@@ -7,6 +7,7 @@ import numpy as np
 from ..groups import SO3
 from ..problems.errors import ParameterError
 from ..problems.rigid_body_se3 import FreeBody
+from .rigid_body import no_auto_step
 from .scene import ProblemKind, Scene, Simulation, register_kind
 from .schema import Key, SceneError
 
@@ -40,8 +41,7 @@ def _body(scene: Scene) -> FreeBody:
 
 def check(scene: Scene) -> None:
     _body(scene)
-    if scene.integrator.dt == "auto":
-        raise SceneError(f"{scene.source}: key 'integrator.dt' = 'auto': automatic steps are available for beam scenes only")
+    no_auto_step(scene)
 
 
 def build(scene: Scene) -> Simulation:
