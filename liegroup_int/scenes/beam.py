@@ -274,8 +274,9 @@ def _undamped(scene: Scene) -> BeamProblem:
         raise SceneError(f"{scene.source}: key 'motion.{end}.kind': {exc.reason}") from None
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
+    section = constants(scene)  # its own one-line errors, named by key
     try:
-        pb = BeamProblem(space, constants(scene), bcs, loads, ic, backend=scene["integrator.backend"],
+        pb = BeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None

@@ -2,10 +2,17 @@
 
 import math
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from liegroup_int.scenes import SceneError, build_scene, builtin_names, builtin_path
+from liegroup_int.scenes import (
+    SceneError,
+    build_scene,
+    builtin_names,
+    builtin_path,
+    load_scene,
+)
 from liegroup_int.scenes.schema import flatten, read_toml
 
 BASES = {name: flatten(read_toml(builtin_path(name))) for name in builtin_names()}
@@ -52,3 +59,14 @@ def test_loader_gives_scene_or_one_line_error(given_keys):
         assert msg.startswith("fuzz.toml") and "\n" not in msg
         return
     assert scene.t_end > 0 and math.isfinite(scene.t_end)
+
+
+@pytest.mark.parametrize("over, key", [({"section.d": 1.157920892373162e+77}, "section.d"),
+                                       ({"section.shape": "square", "section.t": 1e200}, "section.t")])
+def test_overflowing_section_is_one_line_error(over, key):
+    """A size whose section constants overflow a float (found by the fuzz test above: it
+    used to raise OverflowError) is refused naming the key, once."""
+    with pytest.raises(SceneError) as err:
+        load_scene("pendulum", over)
+    msg = str(err.value)
+    assert f"key '{key}': too large" in msg and msg.count("builtin:pendulum") == 1

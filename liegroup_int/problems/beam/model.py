@@ -10,7 +10,7 @@ Units are SI throughout. The beam axis is the third material axis, so
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from math import pi
+from math import isfinite, pi
 
 import numpy as np
 
@@ -55,6 +55,14 @@ class Material:
         return self.G if self.G is not None else self.E / (2.0 * (1.0 + self.nu))
 
 
+def _sized(field: str, make):
+    """``make()``, with a float overflow of the section constants reported against ``field``."""
+    try:
+        return make()
+    except OverflowError:
+        raise ParameterError(field, "too large: the section constants overflow") from None
+
+
 @dataclass(frozen=True)
 class Section:
     """Cross-section constants.
@@ -79,22 +87,24 @@ class Section:
 
     def __post_init__(self):
         for name in ("A", "I1", "I2", "J", "shear_factor"):
-            if not getattr(self, name) > 0:
-                raise ParameterError(name, f"expected a positive section constant, got {getattr(self, name)!r}")
+            v = getattr(self, name)
+            if not (v > 0 and isfinite(v)):
+                raise ParameterError(name, f"expected a positive, finite section constant, got {v!r}")
 
     @staticmethod
     def circle(d: float, shear_factor: float = 1.0) -> "Section":
         """Solid circle of diameter ``d``: ``A = pi d^2/4``, ``I = pi d^4/64``, ``J = pi d^4/32``."""
         if not d > 0:
             raise ParameterError("d", f"expected a positive diameter, got {d!r}")
-        return Section(pi * d**2 / 4, pi * d**4 / 64, pi * d**4 / 64, pi * d**4 / 32, shear_factor)
+        return _sized("d", lambda: Section(pi * d**2 / 4, pi * d**4 / 64, pi * d**4 / 64, pi * d**4 / 32,
+                                           shear_factor))
 
     @staticmethod
     def square(t: float, shear_factor: float = 1.0) -> "Section":
         """Solid square of side ``t``: ``I = t^4/12``, torsion constant ``0.1406 t^4``."""
         if not t > 0:
             raise ParameterError("t", f"expected a positive side, got {t!r}")
-        return Section(t**2, t**4 / 12, t**4 / 12, 0.1406 * t**4, shear_factor)
+        return _sized("t", lambda: Section(t**2, t**4 / 12, t**4 / 12, 0.1406 * t**4, shear_factor))
 
     @staticmethod
     def rectangle(b: float, h: float, shear_factor: float = 1.0) -> "Section":
@@ -107,8 +117,12 @@ class Section:
         if not (b > 0 and h > 0):
             raise ParameterError("b, h", f"expected positive sides, got {b!r}, {h!r}")
         a, c = max(b, h), min(b, h)
-        J = a * c**3 * (1.0 / 3.0 - 0.21 * (c / a) * (1.0 - (c / a) ** 4 / 12.0))
-        return Section(b * h, b * h**3 / 12, h * b**3 / 12, J, shear_factor)
+
+        def make():
+            J = a * c**3 * (1.0 / 3.0 - 0.21 * (c / a) * (1.0 - (c / a) ** 4 / 12.0))
+            return Section(b * h, b * h**3 / 12, h * b**3 / 12, J, shear_factor)
+
+        return _sized("b, h", make)
 
 
 @dataclass(frozen=True)
@@ -135,10 +149,10 @@ class SectionConstants:
     def __post_init__(self):
         for name in ("CN", "CM", "Jm"):
             v = getattr(self, name)
-            if len(v) != 3 or not all(x > 0 for x in v):
-                raise ParameterError(name, f"expected three positive constants, got {v!r}")
-        if not self.mu > 0:
-            raise ParameterError("mu", f"expected a positive mass per length, got {self.mu!r}")
+            if len(v) != 3 or not all(x > 0 and isfinite(x) for x in v):
+                raise ParameterError(name, f"expected three positive, finite constants, got {v!r}")
+        if not (self.mu > 0 and isfinite(self.mu)):
+            raise ParameterError("mu", f"expected a positive, finite mass per length, got {self.mu!r}")
 
     @staticmethod
     def from_material(material: "Material", section: "Section") -> "SectionConstants":
