@@ -240,19 +240,15 @@ def _modes(args) -> int:
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-modes"
-    from .io.modes import dominant, normalized, plot_modes, write_mode_shapes, write_modes_csv
+    from .io.modes import dominant, plot_modes, real_shapes, write_mode_shapes, write_modes_csv
 
-    shapes, rows = [], []
-    for k, m in enumerate(rep.modes, start=1):
-        row = {"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
-               "im_lambda": m.lam.imag, "growing": m.growing, "dominant": ""}
-        if sim.mode_shape is not None:
-            points, disp, rot = sim.mode_shape(m.vector)
-            disp, rot = normalized(disp, rot)
-            extent = float(np.max(np.ptp(points, axis=0))) or 1.0
-            row["dominant"] = dominant(disp, rot, extent)
-            shapes.append((points, disp, rot))
-        rows.append(row)
+    rows = [{"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
+             "im_lambda": m.lam.imag, "growing": m.growing, "dominant": ""} for k, m in enumerate(rep.modes, start=1)]
+    shapes = []
+    if sim.mode_shape is not None:
+        shapes = real_shapes([sim.mode_shape(m.vector) for m in rep.modes], [m.freq_hz for m in rep.modes])
+        for row, (points, disp, rot) in zip(rows, shapes):
+            row["dominant"] = dominant(disp, rot, float(np.max(np.ptp(points, axis=0))) or 1.0)
     out.mkdir(parents=True, exist_ok=True)
     made = [write_modes_csv(out / "modes.csv", rows)]
     if shapes:

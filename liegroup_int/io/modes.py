@@ -53,6 +53,43 @@ def write_mode_shapes(out_dir: Path, shapes: list[tuple], stem: str = "mode") ->
     return made
 
 
+def real_shapes(shapes: list[tuple], freqs, rtol: float = 1e-6) -> list[tuple]:
+    """Real, normalized mode shapes from complex ones ``(points, displacement, rotation)``.
+
+    Each shape is turned so that its largest entry is real (the configuration part of an
+    undamped mode is real up to a phase) and its real part kept (:func:`normalized`).
+    Degenerate pairs (consecutive modes whose frequencies agree to ``rtol``, e.g. the two
+    bending planes of a symmetric section) come from the eigensolver as arbitrary complex
+    combinations of the two planes: each pair is recombined first, into the combination
+    without displacement along the pair's second largest displacement component and the one
+    without displacement along its largest, i.e. one plane each."""
+    out = []
+    f = np.asarray(freqs, dtype=float)
+    i = 0
+    while i < len(shapes):
+        if i + 1 < len(shapes) and abs(f[i + 1] - f[i]) <= rtol * max(abs(f[i]), 1e-300):
+            (p, d1, r1), (_, d2, r2) = shapes[i], shapes[i + 1]
+            amp = np.max(np.abs(d1), axis=0) + np.max(np.abs(d2), axis=0)
+            j1, j2 = np.argsort(amp)[-2:][::-1]
+            for j in (j2, j1):  # the first mode has no j2 displacement, the second no j1
+                _, _, vh = np.linalg.svd(np.stack([d1[:, j], d2[:, j]], axis=1))
+                a, b = np.conj(vh[-1])
+                out.append((p, *_real(a * d1 + b * d2, a * r1 + b * r2)))
+            i += 2
+            continue
+        p, d, r = shapes[i]
+        out.append((p, *_real(d, r)))
+        i += 1
+    return out
+
+
+def _real(disp: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    both = np.concatenate([np.ravel(disp), np.ravel(rot)])
+    k = int(np.argmax(np.abs(both)))
+    phase = abs(both[k]) / both[k] if both[k] != 0 else 1.0
+    return normalized(np.real(disp * phase), np.real(rot * phase))
+
+
 def normalized(disp: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Scale a shape to a largest displacement of 1 (rotation, if it has no displacement)."""
     scale = float(np.max(np.linalg.norm(disp, axis=1)))

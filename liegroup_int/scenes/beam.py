@@ -446,21 +446,12 @@ def build(scene: Scene) -> Simulation:
 
 
 def _mode_shape(pb: BeamProblem, y0, n_points: int = 101):
-    """``Simulation.mode_shape``: the real part of a mode's position and rotation
-    increments (control values, ``vector[0]`` and ``vector[1]``) on the centreline of the
-    initial state ``y0`` at ``n_points`` parameters."""
+    """``Simulation.mode_shape``: a mode's position and rotation increments (control values,
+    ``vector[0]`` and ``vector[1]``, complex) on the centreline of the initial state ``y0``
+    at ``n_points`` parameters."""
     P = pb.space.point_matrix(np.linspace(0.0, 1.0, n_points))
     ref = P @ np.asarray(y0.c, dtype=float)
-
-    def shape(vec):
-        # the configuration part in phase: its largest entry real (the velocity part of an
-        # oscillatory mode is a quarter period ahead)
-        conf = np.asarray(vec[:2])
-        j = np.unravel_index(int(np.argmax(np.abs(conf))), conf.shape)
-        conf = conf * (abs(conf[j]) / conf[j]) if conf[j] != 0 else conf
-        return ref, P @ np.real(conf[0]), P @ np.real(conf[1])
-
-    return shape
+    return lambda vec: (ref, P @ np.asarray(vec[0]), P @ np.asarray(vec[1]))
 
 
 def _frames(pb: BeamProblem, fields=()):

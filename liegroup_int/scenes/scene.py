@@ -152,8 +152,10 @@ class Simulation:
         (beams: ``output.fields``), stored with the state snapshots in results.h5.
     mode_shape : callable, optional
         ``mode_shape(vector) -> (points (k, 3), displacement (k, 3), rotation (k, 3))``: a
-        mode of the linearized increment map (complex, increment-shaped; its real part)
-        along the reference curve, for ``liegroup-int modes``; ``None``: no shapes.
+        mode of the linearized increment map (complex, increment-shaped) as complex
+        displacement and rotation along the reference curve, for ``liegroup-int modes``
+        (which makes them real, :func:`liegroup_int.io.modes.real_shapes`); ``None``: no
+        shapes.
     """
 
     problem: Any

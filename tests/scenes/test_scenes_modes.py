@@ -63,11 +63,14 @@ def test_modes_command_writes_table_shapes_and_picture(tmp_path, capsys):
     assert [int(r["mode"]) for r in rows] == list(range(1, 7))
     f = np.array([float(r["freq_hz"]) for r in rows])
     assert f[0] == pytest.approx(EB_HZ[0], rel=1e-3)  # p = 4, n_ctrl = 31: 5e-4 above
-    assert all(r["dominant"] in ("u2", "u3") for r in rows)  # bending, both planes
-    m = meshio.read(out / "mode_01.vtu")
-    disp = m.point_data["displacement"]
-    assert disp.shape == (101, 3) and np.max(np.linalg.norm(disp, axis=1)) == pytest.approx(1.0)
-    assert np.linalg.norm(disp[0]) < 1e-12  # clamped end
+    # bending; each degenerate pair recombined into one plane each (square section)
+    assert [sorted(r["dominant"] for r in rows[k:k + 2]) for k in (0, 2, 4)] == [["u2", "u3"]] * 3
+    for k in (1, 2):
+        disp = meshio.read(out / f"mode_0{k}.vtu").point_data["displacement"]
+        assert disp.shape == (101, 3) and np.max(np.linalg.norm(disp, axis=1)) == pytest.approx(1.0)
+        assert np.linalg.norm(disp[0]) < 1e-12  # clamped end
+        # out of its plane: the finite-difference noise of the eigenvectors (measured 5e-10)
+        assert np.sort(np.max(np.abs(disp), axis=0))[1] < 1e-6
     assert (out / "modes.pvd").exists() and (out / "modes.png").stat().st_size > 10000
 
 
