@@ -881,17 +881,23 @@ def write_doc(block: str, path: str):
 
 
 # -- main ---------------------------------------------------------------------------------
+def add_row(rows, skipped, fn, label, fmt) -> None:
+    """Append ``fn()`` to ``rows`` and print it with ``fmt``; a run stopped by the driver
+    (e.g. the 1 rad rotation-increment guard) goes to ``skipped`` with ``label``."""
+    try:
+        rows.append(fn())
+    except IntegrationError as exc:
+        skipped.append(f"{label}: {type(exc).__name__}: {exc}")
+        print("   skipped", skipped[-1], flush=True)
+        return
+    print("  ", " ".join(fmt(rows[-1])), flush=True)
+
+
 def sweep_free_body(fcfg, cfg, ref):
     fb_rows, skipped = [], []
 
     def add(fn, label):
-        try:
-            fb_rows.append(fn())
-        except IntegrationError as exc:
-            skipped.append(f"free body {label}: {type(exc).__name__}: {exc}")
-            print("   skipped", skipped[-1], flush=True)
-            return
-        print("  ", " ".join(fb_fmt_row(fb_rows[-1])), flush=True)
+        add_row(fb_rows, skipped, fn, f"free body {label}", fb_fmt_row)
 
     for m, ns in fcfg["njit_fixed"].items():
         for n in ns:
@@ -951,13 +957,8 @@ def main(argv=None):
         for m, vals in sweep.items():
             for v in vals:
                 kw = {"dt": T_END / v} if kind == "fixed" else {"tol": v}
-                try:
-                    rows.append(run_ours(m, ref=ref, cfg=cfg, **kw))
-                except IntegrationError as exc:  # e.g. the 1 rad rotation-increment guard
-                    skipped.append(f"heavy top {m} {kw}: {type(exc).__name__}: {exc}")
-                    print("   skipped", skipped[-1], flush=True)
-                    continue
-                print("  ", " ".join(fmt_row(rows[-1])), flush=True)
+                add_row(rows, skipped, lambda m=m, kw=kw: run_ours(m, ref=ref, cfg=cfg, **kw), f"heavy top {m} {kw}",
+                        fmt_row)
     for m, tols in cfg["scipy"].items():
         for tol in tols:
             rows.append(run_scipy(m, tol, ref, cfg))

@@ -907,7 +907,7 @@ def time_kernels(pb, y, dt, batch_s, repeats, variant="taylor"):
     u = stage_increment(pb, y, dt, variant)
     ys = [np.ascontiguousarray(a, dtype=float) for a in (y.c, y.v, y.w, y.R, y.K, y.K_s)]
     outs = [np.empty_like(a) for a in ys]
-    fixp, fixr = kn.dirichlet_rows(sf, si)
+    fixp, fixr = kn.dirichlet_rows(pb)
     x = np.empty((n, 12))
     out = np.empty((4, n, 3))
     zero = np.zeros((4, n, 3))

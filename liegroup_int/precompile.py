@@ -54,7 +54,7 @@ def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
     step of its compiled loop; returns the seconds it took (compilation or cache loads)."""
     from .guards import start_checks
     from .integrators import resolve_method
-    from .runner import _warm_up
+    from .runner import warm_up
     from .scenes import KINDS, load_scene, parse_override
 
     c = time.perf_counter()
@@ -64,7 +64,7 @@ def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
     dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
     tab = resolve_method(spec.method)
     start_checks(scene, sim, tab, dt, 0.0, sim.y0)
-    _warm_up(sim.problem, tab, 0.0, sim.y0, dt)
+    warm_up(sim.problem, tab, 0.0, sim.y0, dt)
     return time.perf_counter() - c
 
 

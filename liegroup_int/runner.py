@@ -114,7 +114,7 @@ class CompileNotice:
         return False
 
 
-def _warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
+def warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
     """Compile (or load from numba's cache) the engine's loop the run will use, with one
     throw-away step from ``(t0, y0)``; returns the seconds it took (0 without a compiled
     loop). Failures are left to the run itself, which reports them."""
@@ -460,7 +460,7 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     }
     old_handlers = _install_signal_handlers(ckpt)
     t_reached, y_final, status, error = t0, y0, "ok", None
-    compile_s = _warm_up(sim.problem, tab, t0, y0, dt)
+    compile_s = warm_up(sim.problem, tab, t0, y0, dt)
     if compile_s > 2.0 and not quiet:
         print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
     start = time.perf_counter()

@@ -60,7 +60,9 @@ def test_reactions_balance_the_momentum_of_the_pendulum(tmp_path):
             impulse = np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]) * dt)]) + load * t
             dp = h[f"p_{ax}"] - h[f"p_{ax}"][0]
             worst = max(worst, float(np.max(np.abs(dp - impulse)) / np.max(np.abs(dp))))
-        assert np.allclose(h["reaction_start_cy"], 0.0, atol=1e-3 * WEIGHT)  # a hinge takes no couple
+        # a hinge takes no couple: the discrete end moment, measured 1.4e-5 N m (n_ctrl 31)
+        # and 1.7e-6 N m (61), against the weight's moment about the hinge, 0.42 N m
+        assert np.allclose(h["reaction_start_cy"], 0.0, atol=1e-3 * WEIGHT)
         mism.append(worst)
     assert mism[1] < 1e-3 and mism[1] < mism[0] / 5
 

@@ -1242,7 +1242,7 @@ class NumbaBeamKernels:
         self._zero = np.zeros((4, n, 3))
         self.mixed = bool(pb.mixed)
         # work arrays of the wrappers' rate calls (Dirichlet masks, right-hand sides, power)
-        self._fixp, self._fixr = dirichlet_rows(sf, si)
+        self._fixp, self._fixr = dirichlet_rows(pb)
         self._x = np.empty((n, X_COLS if self.mixed else _X_NM))
         self._pw = np.zeros(1)
 
@@ -1305,7 +1305,7 @@ class NumbaBeamKernels:
         for j, r in enumerate(rows):
             lprof[j, :r.size] = r
         sf, si, n = self.sf.copy(), self.si, self.n
-        fixp, fixr = dirichlet_rows(sf, si)
+        fixp, fixr = self._fixp.copy(), self._fixr.copy()
         x = np.empty((n, X_COLS if si[_H_FORM] == FORM_MIXED else _X_NM))
         data = (sf, si, fixp, fixr, x, lpos, lvec, lprof, np.zeros(1))
 
@@ -1332,17 +1332,13 @@ ENGINE_KERNELS = _engine_kernels("beam", engine_rate, engine_action)
 ENGINE_KERNELS_MIXED = _engine_kernels("beam_mixed", engine_rate_mixed, engine_action_mixed)
 
 
-def dirichlet_rows(sf, si):
-    """Boolean ``(n,)`` masks ``(fixp, fixr)``: rows whose position (and velocity) or
-    rotation (and angular velocity) rates are prescribed (zero), method.md section 3
-    (read from the end data in ``si``; plain NumPy, called once per problem)."""
-    n, ne = int(si[_H_N]), int(si[_H_NE])
-    endi = si[si[_H_ENDI]:si[_H_ENDI] + ne * _NEI].reshape(ne, _NEI)
-    fixp = np.zeros(n, dtype=np.bool_)
-    fixr = np.zeros(n, dtype=np.bool_)
-    fixp[endi[endi[:, 1] != 0, 0]] = True
-    fixr[endi[(endi[:, 2] != 0) & (endi[:, 6] == 0), 0]] = True  # moving supports: prescribed rows
-    return fixp, fixr
+def dirichlet_rows(pb) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean ``(n,)`` masks ``(fixp, fixr)`` of the rows whose position (and velocity) and
+    rotation (and angular velocity) rates are prescribed: the position and rotation columns
+    of ``BeamProblem._fix_rows`` (method.md section 3; a moving support's rotation rows are
+    not masked, the kernels set them)."""
+    mask = pb._fix_rows
+    return np.ascontiguousarray(mask[:, 0]), np.ascontiguousarray(mask[:, 1])
 
 
 def _c(a):
