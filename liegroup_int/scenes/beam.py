@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..iga import CollocationSpace, NurbsCurve, arc_nurbs_quadratic, helix_quarter, k_refine, straight
+from ..iga import CollocationSpace, NurbsCurve, arc_length, arc_nurbs_quadratic, helix_quarter, k_refine, straight
+from ..iga.patches import PatchedSpace, split_curve
 from ..problems.beam import (
     BeamProblem,
     BeamState,
@@ -23,7 +24,7 @@ from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
-from .schema import Key, SceneError, non_negative, positive
+from .schema import Key, SceneError, non_negative, positive, resolve_keys
 
 ZERO = (0.0, 0.0, 0.0)
 
@@ -119,6 +120,13 @@ KEYS = {
         Key("initial.velocity", "vec3", ZERO, "uniform initial velocity", "m/s"),
         Key("initial.omega", "vec3", ZERO, "initial rigid angular velocity (spatial)", "rad/s"),
         Key("initial.axis_point", "vec3", ZERO, "point on the axis of the initial rigid rotation", "m"),
+        Key("beams", "tables", (), "a frame: [[beams]] entries in chain order, each a patch with the keys of "
+            "[geometry] (kind, length, direction, origin, ...) and optionally n_ctrl; each beam's end is joined "
+            "rigidly to the next one's start (equal position and rotation, balance of resultants); bc.start and "
+            "bc.end are the chain's ends; replaces [geometry]"),
+        Key("point_loads", "tables", (), "[[point_loads]] entries: s (fraction of the reference length, inside "
+            "(0, 1)), force and couple (spatial, dead), and a time profile (profile, t_on, t_off, ramp, table); a "
+            "beam is split at s into two patches joined rigidly, where the load acts"),
         Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
             "(columns s0p5_x, s0p5_y, s0p5_z for 0.5), e.g. [0.5, 1.0]", "", _fractions),
         Key("output.fields", "strs", (), "section quantities at the collocation points, in results.h5 snapshots "
@@ -147,40 +155,177 @@ def _need(scene: Scene, key: str, why: str):
 
 
 def geometry(scene: Scene) -> NurbsCurve:
-    """Reference centreline at the scene's ``(space.degree, space.n_ctrl)``."""
-    kind, p, n = scene["geometry.kind"], scene["space.degree"], scene["space.n_ctrl"]
+    """Reference centreline at the scene's ``(space.degree, space.n_ctrl)`` (one beam)."""
+    return _curve(scene, lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"])
+
+
+def _base_curve(scene: Scene, get, pre: str) -> NurbsCurve | None:
+    """The given NURBS of ``kind = nurbs`` (before refinement), None for built-in kinds."""
+    if get("kind") != "nurbs":
+        return None
+    pts = np.asarray(get("control_points"), float)
+    if pts.size < 6 or pts.size % 3:
+        _err(scene, f"{pre}control_points", "a flat list of x, y, z triples (at least two points)")
+    pts = pts.reshape(-1, 3)
+    deg = get("degree")
+    w = np.asarray(get("weights"), float)
+    if w.size == 1 and w[0] == 1.0:
+        w = np.ones(len(pts))
+    if w.size != len(pts) or np.any(w <= 0):
+        _err(scene, f"{pre}weights", f"{len(pts)} positive weights")
+    kv = np.asarray(get("knots"), float)
+    if kv.size == 1:
+        from ..iga import open_uniform_knots
+
+        kv = open_uniform_knots(deg, len(pts))
+    if scene["space.degree"] < deg:
+        _err(scene, "space.degree", f"at least the NURBS degree {deg}")
+    return NurbsCurve(deg, kv, pts, w)
+
+
+def _curve(scene: Scene, get, pre: str, n: int, base: NurbsCurve | None = None) -> NurbsCurve:
+    """A centreline of ``n`` control points at degree ``space.degree`` from geometry keys
+    ``get(name)`` (``pre`` names them in errors); ``base`` replaces the described curve."""
+    kind, p = get("kind"), scene["space.degree"]
     if n < p + 1:
         _err(scene, "space.n_ctrl", f"at least space.degree + 1 = {p + 1} control points, got {n}")
     try:
+        if base is not None:
+            return k_refine(base, p, n)
         if kind == "straight":
-            if not np.any(scene["geometry.direction"]):
-                _err(scene, "geometry.direction", "a non-zero vector")
-            return straight(scene["geometry.length"], scene["geometry.direction"], p, n, scene["geometry.origin"])
+            if not np.any(get("direction")):
+                _err(scene, f"{pre}direction", "a non-zero vector")
+            return straight(get("length"), get("direction"), p, n, get("origin"))
         if kind == "arch":
             return arc_nurbs_quadratic(p, n)
         if kind == "helix":
             return helix_quarter(p, n)
-        pts = np.asarray(scene["geometry.control_points"], float)
-        if pts.size < 6 or pts.size % 3:
-            _err(scene, "geometry.control_points", "a flat list of x, y, z triples (at least two points)")
-        pts = pts.reshape(-1, 3)
-        deg = scene["geometry.degree"]
-        w = np.asarray(scene["geometry.weights"], float)
-        if w.size == 1 and w[0] == 1.0:
-            w = np.ones(len(pts))
-        if w.size != len(pts) or np.any(w <= 0):
-            _err(scene, "geometry.weights", f"{len(pts)} positive weights")
-        kv = np.asarray(scene["geometry.knots"], float)
-        if kv.size == 1:
-            from ..iga import open_uniform_knots
-
-            kv = open_uniform_knots(deg, len(pts))
-        base = NurbsCurve(deg, kv, pts, w)
-        if p < deg:
-            _err(scene, "space.degree", f"at least the NURBS degree {deg}")
-        return k_refine(base, p, n)
+        return k_refine(_base_curve(scene, get, pre), p, n)
     except ValueError as exc:
-        raise SceneError(f"{scene.source}: geometry: {exc}") from None
+        raise SceneError(f"{scene.source}: {pre.rstrip('.') or 'geometry'}: {exc}") from None
+
+
+#: Keys of one ``[[beams]]`` entry: those of ``[geometry]`` plus a name and its own n_ctrl.
+BEAM_KEYS = {
+    "name": Key("name", "str", "", "name of the beam (errors and docs)"),
+    "n_ctrl": Key("n_ctrl", "int", 0, "control points of this patch (0: space.n_ctrl)", "", lambda v: None if v >= 0 else
+                  "an integer >= 0"),
+}
+#: Keys of one ``[[point_loads]]`` entry.
+POINT_LOAD_KEYS = {
+    "s": Key("s", "float", None, "position as a fraction of the reference length, in (0, 1)", "",
+             lambda v: None if 0.0 < v < 1.0 else "a fraction in (0, 1) (use loads.start / loads.end at the ends)"),
+    "force": Key("force", "vec3", ZERO, "force (spatial, dead load)", "N"),
+    "couple": Key("couple", "vec3", ZERO, "couple (spatial, dead load)", "N m"),
+    "profile": Key("profile", "str", "constant", "time profile", choices=PROFILE_KINDS),
+    "t_on": Key("t_on", "float", 0.0, "profile switch-on time", "s", non_negative),
+    "t_off": Key("t_off", "float", float("inf"), "profile switch-off time", "s", positive),
+    "ramp": Key("ramp", "float", 1.0, "ramp duration", "s", positive),
+    "table": Key("table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
+}
+
+
+def _pieces(scene: Scene):
+    """The patches of the scene before splitting: ``[(where, get, base_curve_or_None, n)]``."""
+    if not scene["beams"]:
+        return [("geometry", lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"])]
+    given = [k for k in scene.raw if k.startswith("geometry.")]
+    if given:
+        raise SceneError(f"{scene.source}: key '{given[0]}': a frame takes its geometry from [[beams]]; "
+                         "remove [geometry]")
+    geo_keys = {k.split(".", 1)[1]: Key(k.split(".", 1)[1], v.kind, v.default, v.doc, v.unit, v.check, v.choices)
+                for k, v in KEYS.items() if k.startswith("geometry.")}
+    out = []
+    for i, entry in enumerate(scene["beams"]):
+        where = f"beams[{i}]"
+        v = resolve_keys({**geo_keys, **BEAM_KEYS}, entry, f"{scene.source}: {where}")
+        label = f"{where}." if not v["name"] else f"beams[{i}] ({v['name']})."
+        out.append((label, v.get, label, v["n_ctrl"] or scene["space.n_ctrl"]))
+    return out
+
+
+def _exact_base(scene: Scene, get, pre: str) -> NurbsCurve | None:
+    """The described centreline in its exact coarsest form (degree 1 line, quadratic NURBS
+    arc, the given NURBS), or None for the helix (an interpolant)."""
+    kind = get("kind")
+    if kind == "straight":
+        return straight(get("length"), get("direction"), 1, 2, get("origin"))
+    if kind == "arch":
+        return arc_nurbs_quadratic(2, 3)
+    return _base_curve(scene, get, pre) if kind == "nurbs" else None
+
+
+def _split_at(base: NurbsCurve, frac: float):
+    """The two exact pieces of a centreline split at the fraction ``frac`` of its length."""
+    length = float(arc_length(base, [1.0])[0])
+    lo, hi = 0.0, 1.0
+    for _ in range(60):  # bisection on the arc length
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if float(arc_length(base, [mid])[0]) < frac * length else (lo, mid)
+    return split_curve(base, 0.5 * (lo + hi))
+
+
+def frame_space(scene: Scene):
+    """The collocation space of the scene and the joint point loads ``(space, joint_loads)``:
+    one :class:`CollocationSpace` for a single beam without point loads, else a
+    :class:`PatchedSpace` (beams of ``[[beams]]``, split where ``[[point_loads]]`` act;
+    the two pieces of a split share its control points by length, one shared)."""
+    p = scene["space.degree"]
+    # pieces: (get, pre, refined curve, n_ctrl, exact coarse curve or None = not yet built)
+    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for _, get, pre, n in _pieces(scene)]
+    loads = []
+    for i, entry in enumerate(scene["point_loads"]):
+        v = resolve_keys(POINT_LOAD_KEYS, entry, f"{scene.source}: point_loads[{i}]")
+        if v["s"] is None:
+            raise SceneError(f"{scene.source}: point_loads[{i}]: missing key 's' ({POINT_LOAD_KEYS['s'].doc})")
+        try:
+            prof = Profile(kind=v["profile"], t_on=v["t_on"], t_off=v["t_off"], ramp=v["ramp"], table=v["table"])
+        except ParameterError as exc:
+            raise SceneError(f"{scene.source}: point_loads[{i}]: key '{exc.field}': {exc.reason}") from None
+        loads.append((v["s"], i, EndLoad(force=v["force"], couple=v["couple"], force_profile=prof,
+                                         couple_profile=prof)))
+    loads.sort(key=lambda x: x[0])
+    if len(pieces) == 1 and not loads:
+        get, pre, curve, _, _ = pieces[0]
+        return _space(scene, get, pre, curve), ()
+    spaces = [_space(scene, get, pre, c) for get, pre, c, _, _ in pieces]
+    joint_loads = [None] * (len(spaces) - 1)
+    for s, i, load in loads:
+        edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in spaces])])
+        edges /= edges[-1]
+        at = int(np.argmin(np.abs(edges - s)))
+        if abs(edges[at] - s) <= 1e-9:  # at a joint
+            if joint_loads[at - 1] is not None:
+                raise SceneError(f"{scene.source}: point_loads[{i}]: another point load acts at s = {s!r}")
+            joint_loads[at - 1] = load
+            continue
+        k = int(np.searchsorted(edges, s) - 1)
+        get, pre, _, n, exact = pieces[k]
+        exact = exact if exact is not None else _exact_base(scene, get, pre)
+        if exact is None:
+            raise SceneError(f"{scene.source}: point_loads[{i}]: a point load inside a helix beam is not supported; "
+                             "describe the helix as a NURBS (kind = nurbs)")
+        frac = (s - edges[k]) / (edges[k + 1] - edges[k])
+        left, right = _split_at(exact, frac)
+        n_left = max(p + 1, int(round(frac * (n - 1))) + 1)
+        n_right = max(p + 1, n + 1 - n_left)
+        a, b = _curve(scene, get, pre, n_left, left), _curve(scene, get, pre, n_right, right)
+        pieces[k:k + 1] = [(get, pre, a, n_left, left), (get, pre, b, n_right, right)]
+        spaces[k:k + 1] = [_space(scene, get, pre, a), _space(scene, get, pre, b)]
+        joint_loads.insert(k, load)
+    try:
+        space = PatchedSpace(spaces)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: key 'beams': {exc}") from None
+    return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads)
+
+
+def _space(scene: Scene, get, pre: str, curve: NurbsCurve) -> CollocationSpace:
+    a = get("reference_vector")
+    try:
+        return CollocationSpace(curve, reference_vector=None if not np.any(a) else a)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: key '{pre}reference_vector': {exc}") from None
 
 
 def constants(scene: Scene) -> SectionConstants:
@@ -257,16 +402,11 @@ _checked: tuple = (None, None)
 
 def _undamped(scene: Scene) -> BeamProblem:
     """The problem with ``kelvin_voigt = "auto"`` taken as 0 (sized by :func:`_sized`)."""
-    curve = geometry(scene)
-    a = scene["geometry.reference_vector"]
-    try:
-        space = CollocationSpace(curve, reference_vector=None if not np.any(a) else a)
-    except ValueError as exc:
-        raise SceneError(f"{scene.source}: key 'geometry.reference_vector': {exc}") from None
+    space, joint_loads = frame_space(scene)
     loads = Loads(distributed_force=scene["loads.distributed_force"], gravity=scene["loads.gravity"],
                   distributed_couple=scene["loads.distributed_couple"],
                   distributed_profile=_profile(scene, "loads"), start=_end_load(scene, "start"),
-                  end=_end_load(scene, "end"))
+                  end=_end_load(scene, "end"), joints=joint_loads)
     try:
         bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"], _motion(scene, "start"), _motion(scene, "end"))
     except ParameterError as exc:

@@ -34,7 +34,8 @@ class Key:
         ``"float"``, ``"int"``, ``"str"``, ``"bool"``, ``"vec3"`` (3 floats),
         ``"floats"`` (list of floats), ``"float_or_auto"`` (number, ``"auto"`` or
         ``"none"``), ``"number_or_auto"`` (number or ``"auto"``), ``"table"`` (list of
-        ``[t, value]`` pairs) or ``"strs"`` (list of strings).
+        ``[t, value]`` pairs), ``"strs"`` (list of strings) or ``"tables"`` (a TOML array
+        of tables, ``[[name]]``; each entry is checked by the problem kind).
     default : object
         Default value, or ``REQUIRED``.
     doc : str
@@ -150,6 +151,10 @@ def coerce(key: Key, value, where: str):
             if bad:
                 fail("names among " + ", ".join(key.choices))
         value = tuple(value)
+    elif k == "tables":
+        if not (isinstance(value, list) and all(isinstance(x, Mapping) for x in value)):
+            fail("an array of tables ([[" + key.name + "]] entries)")
+        value = tuple(dict(x) for x in value)
     elif k == "table":
         ok = isinstance(value, list) and len(value) >= 2 and all(
             isinstance(r, list) and len(r) == 2 and all(_is_number(x) for x in r) for r in value

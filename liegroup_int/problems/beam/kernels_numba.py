@@ -83,7 +83,8 @@ _H_N, _H_W, _H_L, _H_U, _H_DENSE, _H_NE = 0, 1, 2, 3, 4, 5
 _H_PRM, _H_SER, _H_GEO, _H_BAND, _H_LU, _H_MINV, _H_ENDF, _H_ENDI, _H_J0, _H_NT = range(6, 16)
 _H_FORM = 16  # formulation: FORM_PRIMAL or FORM_MIXED
 _H_QUAD = 17  # offset of the quadrature weights (n) in sf
-_HEADER = 18
+_H_NJ, _H_JF, _H_JI = 18, 19, 20  # rigid joints: count, offsets of their float and int rows
+_HEADER = 21
 FORM_PRIMAL, FORM_MIXED = 0, 1
 #: Columns of the stage work array ``x``: 12 right-hand sides, then (mixed only) the
 #: resultant values n, m (6, solved in place into their control values), R^T c_s (3),
@@ -100,6 +101,8 @@ _N_PRM = 21
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
 _NEI, _NEF = 7, 8
+# per joint: ints (row a, row b), floats (factor_a, factor_b, force(3), couple(3))
+_NJI, _NJF = 2, 8
 
 
 # ====================================================================== scalar helpers
@@ -470,6 +473,67 @@ def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, sf, si):
 
 
 # ====================================================================== stage rates
+@njit(cache=True, fastmath=False, inline="always")
+def _joint_views(sf, si):
+    nj = si[_H_NJ]
+    jf = sf[si[_H_JF]:si[_H_JF] + _NJF * nj].reshape((nj, _NJF))
+    ji = si[si[_H_JI]:si[_H_JI] + _NJI * nj].reshape((nj, _NJI))
+    return jf, ji
+
+
+@njit(cache=True, fastmath=_FM)
+def joint_rows(x, v, w, R, sf, si, power):
+    """Rigid joints (``BeamProblem._joint_rows``, docs/theory.md section 13): the rows
+    ``a, b`` of each joint get one common rate, from their own rows in ``x`` (before any
+    solve) and the joint's balance residuals ``r_n = n_b - n_a + F``, ``r_m = m_b - m_a + C``
+    (material ``N, M`` read from ``x[:, _X_N]`` and ``x[:, _X_M]``). Returns the power of
+    the joint loads."""
+    prm = sf[si[_H_PRM]:si[_H_PRM] + _N_PRM]
+    J = prm[_P_JM:_P_JM + 3]
+    mu = prm[_P_MU]
+    jf, ji = _joint_views(sf, si)
+    pwr = 0.0
+    ra, rb = np.empty(3), np.empty(3)
+    S, inv, rhs = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
+    for k in range(ji.shape[0]):
+        a, b = ji[k, 0], ji[k, 1]
+        fac = jf[k, 0] + jf[k, 1]
+        for d in range(3):
+            na = R[a, d, 0] * x[a, _X_N] + R[a, d, 1] * x[a, _X_N + 1] + R[a, d, 2] * x[a, _X_N + 2]
+            nb = R[b, d, 0] * x[b, _X_N] + R[b, d, 1] * x[b, _X_N + 1] + R[b, d, 2] * x[b, _X_N + 2]
+            ma = R[a, d, 0] * x[a, _X_M] + R[a, d, 1] * x[a, _X_M + 1] + R[a, d, 2] * x[a, _X_M + 2]
+            mb = R[b, d, 0] * x[b, _X_M] + R[b, d, 1] * x[b, _X_M + 1] + R[b, d, 2] * x[b, _X_M + 2]
+            ra[d] = nb - na + jf[k, 2 + d]
+            rb[d] = mb - ma + jf[k, 5 + d]
+        if power:
+            pwr += (jf[k, 2] * v[a, 0] + jf[k, 3] * v[a, 1] + jf[k, 4] * v[a, 2]
+                    + jf[k, 5] * w[a, 0] + jf[k, 6] * w[a, 1] + jf[k, 7] * w[a, 2])
+        # spatial inertias R diag(J) R^T of both sections, and the torque sum
+        for d in range(3):
+            rhs[d] = fac * rb[d]
+            for e in range(3):
+                sa = R[a, d, 0] * J[0] * R[a, e, 0] + R[a, d, 1] * J[1] * R[a, e, 1] + R[a, d, 2] * J[2] * R[a, e, 2]
+                sb = R[b, d, 0] * J[0] * R[b, e, 0] + R[b, d, 1] * J[1] * R[b, e, 1] + R[b, d, 2] * J[2] * R[b, e, 2]
+                S[d, e] = sa + sb
+                rhs[d] += sa * x[a, 9 + e] + sb * x[b, 9 + e]
+        # 3x3 symmetric positive definite solve: inverse = cofactors^T / det
+        for d in range(3):
+            d1, d2 = (d + 1) % 3, (d + 2) % 3
+            for e in range(3):
+                e1, e2 = (e + 1) % 3, (e + 2) % 3
+                inv[e, d] = S[d1, e1] * S[d2, e2] - S[d1, e2] * S[d2, e1]
+        det = S[0, 0] * inv[0, 0] + S[0, 1] * inv[1, 0] + S[0, 2] * inv[2, 0]
+        for d in range(3):
+            x[a, d] = x[b, d] = 0.5 * (x[a, d] + x[b, d])
+            x[a, 3 + d] = x[b, 3 + d] = 0.5 * (x[a, 3 + d] + x[b, 3 + d])
+            x[a, 6 + d] = x[b, 6 + d] = 0.5 * (x[a, 6 + d] + x[b, 6 + d]) + fac * ra[d] / (2.0 * mu)
+        for d in range(3):
+            x[a, 9 + d] = (inv[d, 0] * rhs[0] + inv[d, 1] * rhs[1] + inv[d, 2] * rhs[2]) / det
+        for d in range(3):
+            x[b, 9 + d] = x[a, 9 + d]
+    return pwr
+
+
 @njit(cache=True, fastmath=_FM)
 def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
     """Stage rate ``k = M_c^-1 rhs`` of the primal formulation into ``out`` ``(4, n, 3)``
@@ -503,6 +567,7 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
     power = prm[_P_POW] != 0.0
     quad = _quad_view(sf, si)
     power_sum = 0.0
+    nj = si[_H_NJ]  # rigid joints: their rows are combined before the solve
     for i in range(n):
         cs0 = cs1 = cs2 = css0 = css1 = css2 = 0.0
         vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
@@ -591,6 +656,9 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
         # resultants (material frame)
         N0_, N1_, N2_ = CN0 * ga0, CN1 * ga1, CN2 * ga2
         M0_, M1_, M2_ = CM0 * km0, CM1 * km1, CM2 * km2
+        if nj > 0:
+            x[i, _X_N], x[i, _X_N + 1], x[i, _X_N + 2] = N0_, N1_, N2_
+            x[i, _X_M], x[i, _X_M + 1], x[i, _X_M + 2] = M0_, M1_, M2_
         # n_s = R (K x N + CN Gamma_s)
         a0, a1, a2 = _cross(k0, k1, k2, N0_, N1_, N2_)
         a0 += CN0 * gs0
@@ -674,9 +742,11 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
             x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
             if moving >= 0:
                 x[i, 9], x[i, 10], x[i, 11] = endf[moving, 2], endf[moving, 3], endf[moving, 4]
-        if not dense:  # forward sweep of the banded solve, fused (rows < i are final)
+        if not dense and nj == 0:  # forward sweep of the banded solve, fused (rows < i are final)
             _forward_row(x, i, lu, lower)
-    _finish_solve(x, lu, lower, si[_H_U], minv, dense, True, out)
+    if nj > 0:
+        power_sum += joint_rows(x, v, w, R, sf, si, power)
+    _finish_solve(x, lu, lower, si[_H_U], minv, dense, nj == 0, out)
     pw[0] = power_sum
 
 
@@ -708,6 +778,7 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
     power = prm[_P_POW] != 0.0
     quad = _quad_view(sf, si)
     power_sum = 0.0
+    nj = si[_H_NJ]  # rigid joints: their rows are combined before the solve
     # ---- pass 1: pointwise constitutive resultants
     for i in range(n):
         cs0 = cs1 = cs2 = 0.0
@@ -869,9 +940,11 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
             x[i, 11] = r20 * z0 + r21 * z1 + r22 * z2
             if moving >= 0:
                 x[i, 9], x[i, 10], x[i, 11] = endf[moving, 2], endf[moving, 3], endf[moving, 4]
-        if not dense:
+        if not dense and nj == 0:
             _forward_row(x, i, lu, lower)
-    _finish_solve(x, lu, lower, upper, minv, dense, True, out)
+    if nj > 0:
+        power_sum += joint_rows(x, v, w, R, sf, si, power)
+    _finish_solve(x, lu, lower, upper, minv, dense, nj == 0, out)
     pw[0] = power_sum
 
 
@@ -1190,7 +1263,7 @@ class NumbaBeamKernels:
         ne = len(ends)
         endi = np.zeros((ne, _NEI), dtype=np.int64)
         endf = np.zeros((ne, _NEF))
-        profiles = []  # (row, first column, base vector, profile) of non-constant loads
+        profiles = []  # (block, row, first column, base vector, profile) of non-constant loads
         for k, e in enumerate(ends):
             endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann, e.load.follower,
                        e.motion is not None)
@@ -1199,7 +1272,7 @@ class NumbaBeamKernels:
                 scale, prof = e.motion.acceleration_profile()
                 a = scale * e.motion.unit_axis
                 endf[k, 2:5] = a * prof(0.0)
-                profiles.append((k, 2, a, prof))
+                profiles.append(("endf", k, 2, a, prof))
             ld = e.load
             for col, vec, prof, on in ((2, ld.force, ld.force_profile, e.force_neumann),
                                        (5, ld.couple, ld.couple_profile, e.moment_neumann)):
@@ -1209,10 +1282,27 @@ class NumbaBeamKernels:
                 if prof.is_constant:
                     endf[k, col:col + 3] = vec * prof(0.0)
                 else:
-                    profiles.append((k, col, vec, prof))
+                    profiles.append(("endf", k, col, vec, prof))
+
+        nj = len(pb.joints)
+        jointi = np.zeros((nj, _NJI), dtype=np.int64)
+        jointf = np.zeros((nj, _NJF))
+        for k, j in enumerate(pb.joints):
+            jointi[k] = (j.a, j.b)
+            jointf[k, 0], jointf[k, 1] = j.factor_a, j.factor_b
+            if j.load is None:
+                continue
+            for col, vec, prof in ((2, j.load.force, j.load.force_profile), (5, j.load.couple, j.load.couple_profile)):
+                vec = np.asarray(vec, dtype=float)
+                if not np.any(vec):
+                    continue
+                if prof.is_constant:
+                    jointf[k, col:col + 3] = vec * prof(0.0)
+                else:
+                    profiles.append(("jointf", k, col, vec, prof))
 
         blocks = [("prm", prm), ("ser", ser), ("geo", geo), ("band", bands), ("lu", ab),
-                  ("minv", minv), ("endf", endf), ("quad", np.asarray(pb.quad, dtype=float))]
+                  ("minv", minv), ("endf", endf), ("quad", np.asarray(pb.quad, dtype=float)), ("jointf", jointf)]
         offs, pos = {}, 0
         for name, arr in blocks:
             offs[name] = pos
@@ -1220,7 +1310,7 @@ class NumbaBeamKernels:
         sf = np.empty(pos)
         for name, arr in blocks:
             sf[offs[name]:offs[name] + arr.size] = np.ascontiguousarray(arr, dtype=float).ravel()
-        si = np.zeros(_HEADER + endi.size + n, dtype=np.int64)
+        si = np.zeros(_HEADER + endi.size + n + jointi.size, dtype=np.int64)
         si[_H_N], si[_H_W], si[_H_L], si[_H_U] = n, bands.shape[2], lower, upper
         si[_H_DENSE], si[_H_NE] = int(dense), ne
         si[_H_PRM], si[_H_SER], si[_H_GEO], si[_H_BAND] = offs["prm"], offs["ser"], offs["geo"], offs["band"]
@@ -1230,10 +1320,13 @@ class NumbaBeamKernels:
         si[_H_FORM] = FORM_MIXED if pb.mixed else FORM_PRIMAL
         si[_H_QUAD] = offs["quad"]
         si[_HEADER:_HEADER + endi.size] = endi.ravel()
-        si[_HEADER + endi.size:] = j0
+        si[_HEADER + endi.size:_HEADER + endi.size + n] = j0
+        si[_H_NJ], si[_H_JF], si[_H_JI] = nj, offs["jointf"], _HEADER + endi.size + n
+        si[_HEADER + endi.size + n:] = jointi.ravel()
         self.sf, self.si = sf, si
         # positions in ``sf`` (not views: they would not survive pickling)
-        self._profiles = [(offs["endf"] + k * _NEF + col, vec, prof) for k, col, vec, prof in profiles]
+        width = {"endf": _NEF, "jointf": _NJF}
+        self._profiles = [(offs[blk] + k * width[blk] + col, vec, prof) for blk, k, col, vec, prof in profiles]
         dprof = pb.loads.distributed_profile
         if not dprof.is_constant:  # distributed loads with a time profile
             self._profiles += [(offs["prm"] + _P_Q, np.asarray(pb.q, float), dprof),
@@ -1243,7 +1336,7 @@ class NumbaBeamKernels:
         self.mixed = bool(pb.mixed)
         # work arrays of the wrappers' rate calls (Dirichlet masks, right-hand sides, power)
         self._fixp, self._fixr = dirichlet_rows(pb)
-        self._x = np.empty((n, X_COLS if self.mixed else _X_NM))
+        self._x = np.empty((n, X_COLS if self.mixed or nj else _X_NM))
         self._pw = np.zeros(1)
 
     # ------------------------------------------------------------------ wrappers
@@ -1306,7 +1399,7 @@ class NumbaBeamKernels:
             lprof[j, :r.size] = r
         sf, si, n = self.sf.copy(), self.si, self.n
         fixp, fixr = self._fixp.copy(), self._fixr.copy()
-        x = np.empty((n, X_COLS if si[_H_FORM] == FORM_MIXED else _X_NM))
+        x = np.empty((n, X_COLS if si[_H_FORM] == FORM_MIXED or si[_H_NJ] else _X_NM))
         data = (sf, si, fixp, fixr, x, lpos, lvec, lprof, np.zeros(1))
 
         def pack(y):

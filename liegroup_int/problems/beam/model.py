@@ -262,6 +262,9 @@ class Loads:
         Time profile of the distributed force, gravity and couple.
     start, end : EndLoad
         Loads at ``s = 0`` and ``s = L`` (only where that end is not clamped).
+    joints : tuple of EndLoad
+        Point loads at the joints of a chain of patches (:class:`~liegroup_int.iga.PatchedSpace`),
+        one per joint in chain order (dead loads: ``follower`` is refused); empty: none.
     """
 
     distributed_force: tuple = (0.0, 0.0, 0.0)
@@ -270,6 +273,7 @@ class Loads:
     distributed_profile: Profile = field(default_factory=Profile)
     start: EndLoad = field(default_factory=EndLoad)
     end: EndLoad = field(default_factory=EndLoad)
+    joints: tuple = ()
 
 
 @dataclass(frozen=True)

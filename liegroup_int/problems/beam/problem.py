@@ -73,11 +73,26 @@ class _End:
     motion: object = None  # SupportMotion of a clamped end: its rotation rows are prescribed
 
 
+@dataclass(frozen=True)
+class _Joint:
+    """A rigid joint of two patches: rows ``a`` (end of one patch) and ``b`` (start of
+    the next), their Neumann factors ``C* / l_s`` and the point load there (or None)."""
+
+    a: int
+    b: int
+    factor_a: float
+    factor_b: float
+    load: object = None
+
+
 def quadrature_weights(space: CollocationSpace, n_gauss: int = 12) -> np.ndarray:
     """Weights ``w`` with ``int_0^L f ds ~= sum_i w_i f(s_i)`` over collocation values.
 
-    Exact for ``f`` in the trial space: ``w = M_c^-T b`` with ``b_j = int R_j J du``.
+    Exact for ``f`` in the trial space: ``w = M_c^-T b`` with ``b_j = int R_j J du``
+    (patch by patch for a :class:`~liegroup_int.iga.PatchedSpace`).
     """
+    if hasattr(space, "patches"):
+        return np.concatenate([quadrature_weights(sp, n_gauss) for sp in space.patches])
     knots = np.unique(space.curve.knots)
     x, gw = np.polynomial.legendre.leggauss(n_gauss)
     a, b = knots[:-1, None], knots[1:, None]
@@ -163,13 +178,14 @@ class BeamProblem(Problem):
         )
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
+        self.joints = self._joints(space, loads)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
         # loads that do work, or viscous dissipation: the drivers then integrate their
         # power (quadrature_rate)
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
-            for e in self.neumann_ends))
+            for e in self.neumann_ends) or any(j.load is not None for j in self.joints))
         # --- backend selection (compiled kernels: kernels_numba.py) -------------------
         if backend not in ("numpy", "numba"):
             raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
@@ -212,6 +228,22 @@ class BeamProblem(Problem):
             force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load, motion=motion,
         )
 
+    @staticmethod
+    def _joints(space, loads) -> tuple:
+        """The rigid joints of a :class:`~liegroup_int.iga.PatchedSpace` (none for one patch)."""
+        rows = getattr(space, "joints", ())
+        if loads.joints and len(loads.joints) != len(rows):
+            raise ValueError(f"loads.joints: {len(loads.joints)} joint load(s) for {len(rows)} joint(s)")
+        out = []
+        for k, (a, b) in enumerate(rows):
+            ld = loads.joints[k] if loads.joints else None
+            if ld is not None and ld.follower:
+                raise ValueError(f"loads.joints[{k}]: a joint load is a dead load (follower = false)")
+            pa, pb = space.patches[k], space.patches[k + 1]
+            out.append(_Joint(a, b, C_STAR / pa.l_s_end, C_STAR / pb.l_s_start,
+                              ld if ld is not None and ld.active else None))
+        return tuple(out)
+
     def _dirichlet_mask(self) -> np.ndarray:
         """Boolean ``(n, 4)``: which (row, field) right-hand sides are prescribed rates
         (fields: position, rotation, velocity, angular velocity)."""
@@ -226,7 +258,7 @@ class BeamProblem(Problem):
     def initial_state(self) -> BeamState:
         """Reference configuration with the initial velocity field."""
         sp = self.space
-        c = np.array(sp.curve.control_points, dtype=float)
+        c = np.array(sp.control_points if hasattr(sp, "patches") else sp.curve.control_points, dtype=float)
         ic = self.initial
         omega = np.asarray(ic.omega, float)
         v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
@@ -370,7 +402,31 @@ class BeamProblem(Problem):
         rhs[:, 3] = rot(R, tq / self.Jm)
         for e in self.moving_ends:  # prescribed angular acceleration theta''(t) a (spatial)
             rhs[e.index, 3] = e.motion.acceleration(t) * e.motion.unit_axis
+        if self.joints:
+            self._joint_rows(rhs, t, R, N, M)
         return rhs
+
+    def _joint_rows(self, rhs: np.ndarray, t: float, R: np.ndarray, N: np.ndarray, M: np.ndarray) -> None:
+        """Rigid joints (docs/theory.md section 13): the rows ``a, b`` of the two patch ends
+        get one common rate. Each end's own collocation row is completed by the
+        enhanced-collocation term of the joint's balance residual ``r = n_b - n_a + F``
+        (and ``m_b - m_a + C``); the common translational rate is the mass-weighted mean of
+        the two rows, the angular one the inertia-weighted mean (spatial inertias
+        ``R J R^T`` of both sections)."""
+        J = np.diag(self.Jm)
+        for j in self.joints:
+            a, b = j.a, j.b
+            r_n = R[b] @ N[b] - R[a] @ N[a]
+            r_m = R[b] @ M[b] - R[a] @ M[a]
+            if j.load is not None:
+                r_n = r_n + self._end_force(j.load, t, R[a])
+                r_m = r_m + self._end_couple(j.load, t, R[a])
+            fac = j.factor_a + j.factor_b
+            Ia, Ib = R[a] @ J @ R[a].T, R[b] @ J @ R[b].T
+            lin = 0.5 * (rhs[a, 2] + rhs[b, 2]) + fac * r_n / (2.0 * self.mu)
+            ang = np.linalg.solve(Ia + Ib, Ia @ rhs[a, 3] + Ib @ rhs[b, 3] + fac * r_m)
+            for f, val in ((0, 0.5 * (rhs[a, 0] + rhs[b, 0])), (1, 0.5 * (rhs[a, 1] + rhs[b, 1])), (2, lin), (3, ang)):
+                rhs[a, f] = rhs[b, f] = val
 
     @staticmethod
     def _end_force(ld, t: float, R_end: np.ndarray) -> np.ndarray:
@@ -433,6 +489,10 @@ class BeamProblem(Problem):
                 p += float(np.dot(self._end_force(ld, t, R_end), y.v[e.index]))
             if e.moment_neumann and np.any(ld.couple):
                 p += float(np.dot(self._end_couple(ld, t, R_end), y.w[e.index]))
+        for j in self.joints:
+            if j.load is not None:
+                p += float(np.dot(self._end_force(j.load, t, y.R[j.a]), y.v[j.a])
+                           + np.dot(self._end_couple(j.load, t, y.R[j.a]), y.w[j.a]))
         return p
 
     # ------------------------------------------------------------------ diagnostics
@@ -456,6 +516,10 @@ class BeamProblem(Problem):
             ld = e.load
             if e.force_neumann and np.any(ld.force) and ld.force_profile.is_constant and not ld.follower:
                 potential -= float(np.dot(ld.force, y.c[e.index]))
+        for j in self.joints:
+            ld = j.load
+            if ld is not None and np.any(ld.force) and ld.force_profile.is_constant:
+                potential -= float(np.dot(ld.force, y.c[j.a]))
         return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
 
     def mechanical_energy(self, y: BeamState) -> float:
