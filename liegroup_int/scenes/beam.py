@@ -24,7 +24,7 @@ from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
-from .schema import Key, SceneError, non_negative, positive, resolve_keys
+from .schema import Key, SceneError, flatten, non_negative, positive, resolve_keys
 
 ZERO = (0.0, 0.0, 0.0)
 
@@ -121,7 +121,8 @@ KEYS = {
         Key("initial.omega", "vec3", ZERO, "initial rigid angular velocity (spatial)", "rad/s"),
         Key("initial.axis_point", "vec3", ZERO, "point on the axis of the initial rigid rotation", "m"),
         Key("beams", "tables", (), "a frame: [[beams]] entries in chain order, each a patch with the keys of "
-            "[geometry] (kind, length, direction, origin, ...) and optionally n_ctrl; each beam's end is joined "
+            "[geometry] (kind, length, direction, origin, ...), optionally its own n_ctrl and its own section "
+            "([beams.section], [beams.material]: the scene's keys fill in the rest); each beam's end is joined "
             "rigidly to the next one's start (equal position and rotation, balance of resultants); bc.start and "
             "bc.end are the chain's ends; replaces [geometry]"),
         Key("point_loads", "tables", (), "[[point_loads]] entries: s (fraction of the reference length, inside "
@@ -228,20 +229,40 @@ POINT_LOAD_KEYS = {
 def _pieces(scene: Scene):
     """The patches of the scene before splitting: ``[(where, get, base_curve_or_None, n)]``."""
     if not scene["beams"]:
-        return [("geometry", lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"])]
+        return [("geometry", lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"], None)]
     given = [k for k in scene.raw if k.startswith("geometry.")]
     if given:
         raise SceneError(f"{scene.source}: key '{given[0]}': a frame takes its geometry from [[beams]]; "
                          "remove [geometry]")
     geo_keys = {k.split(".", 1)[1]: Key(k.split(".", 1)[1], v.kind, v.default, v.doc, v.unit, v.check, v.choices)
                 for k, v in KEYS.items() if k.startswith("geometry.")}
+    section_keys = {k: v for k, v in KEYS.items() if k.startswith(SECTION_PREFIXES) and k != "material.kelvin_voigt"}
     out = []
     for i, entry in enumerate(scene["beams"]):
         where = f"beams[{i}]"
-        v = resolve_keys({**geo_keys, **BEAM_KEYS}, entry, f"{scene.source}: {where}")
+        flat = flatten(entry)
+        own = {k: flat.pop(k) for k in list(flat) if k.startswith(SECTION_PREFIXES)}
+        v = resolve_keys({**geo_keys, **BEAM_KEYS}, flat, f"{scene.source}: {where}")
         label = f"{where}." if not v["name"] else f"beams[{i}] ({v['name']})."
-        out.append((label, v.get, label, v["n_ctrl"] or scene["space.n_ctrl"]))
+        if own:  # its own section: the given keys, the scene's for the rest
+            if not set(own) <= set(section_keys):
+                _unknown_section_key(scene, where, own, section_keys)
+            given = resolve_keys({k: section_keys[k] for k in own}, own, f"{scene.source}: {where}")
+            section = constants(scene, lambda k, g=given: g[k] if k in g else scene[k], label)
+        else:
+            section = None
+        out.append((label, v.get, label, v["n_ctrl"] or scene["space.n_ctrl"], section))
     return out
+
+
+#: Key prefixes a ``[[beams]]`` entry may set for itself (its section).
+SECTION_PREFIXES = ("section.", "material.")
+
+
+def _unknown_section_key(scene: Scene, where: str, own: dict, section_keys: dict):
+    bad = sorted(set(own) - set(section_keys))[0]
+    hint = " (kelvin_voigt is set once, in [material])" if bad == "material.kelvin_voigt" else ""
+    raise SceneError(f"{scene.source}: {where}: unknown key '{bad}'{hint}")
 
 
 def _exact_base(scene: Scene, get, pre: str) -> NurbsCurve | None:
@@ -266,13 +287,16 @@ def _split_at(base: NurbsCurve, frac: float):
 
 
 def frame_space(scene: Scene):
-    """The collocation space of the scene and the joint point loads ``(space, joint_loads)``:
+    """The collocation space of the scene, the joint point loads, and one section per patch
+    when a ``[[beams]]`` entry has its own (else None): ``(space, joint_loads, sections)``;
     one :class:`CollocationSpace` for a single beam without point loads, else a
     :class:`PatchedSpace` (beams of ``[[beams]]``, split where ``[[point_loads]]`` act;
     the two pieces of a split share its control points by length, one shared)."""
     p = scene["space.degree"]
     # pieces: (get, pre, refined curve, n_ctrl, exact coarse curve or None = not yet built)
-    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for _, get, pre, n in _pieces(scene)]
+    beams = _pieces(scene)
+    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for _, get, pre, n, _ in beams]
+    sections = [sec for *_, sec in beams]
     loads = []
     for i, entry in enumerate(scene["point_loads"]):
         v = resolve_keys(POINT_LOAD_KEYS, entry, f"{scene.source}: point_loads[{i}]")
@@ -287,7 +311,7 @@ def frame_space(scene: Scene):
     loads.sort(key=lambda x: x[0])
     if len(pieces) == 1 and not loads:
         get, pre, curve, _, _ = pieces[0]
-        return _space(scene, get, pre, curve), ()
+        return _space(scene, get, pre, curve), (), sections[0]
     spaces = [_space(scene, get, pre, c) for get, pre, c, _, _ in pieces]
     joint_loads = [None] * (len(spaces) - 1)
     for s, i, load in loads:
@@ -311,13 +335,19 @@ def frame_space(scene: Scene):
         n_right = max(p + 1, n + 1 - n_left)
         a, b = _curve(scene, get, pre, n_left, left), _curve(scene, get, pre, n_right, right)
         pieces[k:k + 1] = [(get, pre, a, n_left, left), (get, pre, b, n_right, right)]
+        sections[k:k + 1] = [sections[k], sections[k]]
         spaces[k:k + 1] = [_space(scene, get, pre, a), _space(scene, get, pre, b)]
         joint_loads.insert(k, load)
     try:
         space = PatchedSpace(spaces)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key 'beams': {exc}") from None
-    return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads)
+    if any(sec is not None for sec in sections):
+        shared = constants(scene) if any(sec is None for sec in sections) else None
+        sections = tuple(sec if sec is not None else shared for sec in sections)
+    else:
+        sections = None
+    return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads), sections
 
 
 def _space(scene: Scene, get, pre: str, curve: NurbsCurve) -> CollocationSpace:
@@ -328,29 +358,38 @@ def _space(scene: Scene, get, pre: str, curve: NurbsCurve) -> CollocationSpace:
         raise SceneError(f"{scene.source}: key '{pre}reference_vector': {exc}") from None
 
 
-def constants(scene: Scene) -> SectionConstants:
-    shape = scene["section.shape"]
+def constants(scene: Scene, get=None, pre: str = "") -> SectionConstants:
+    """The section of the scene, or of a ``[[beams]]`` entry: ``get(key)`` reads its
+    ``section.*`` and ``material.*`` keys (``pre`` names the entry in errors)."""
+    get = get or (lambda k: scene[k])
+
+    def need(key, why):
+        if get(key) is None:
+            raise SceneError(f"{scene.source}: missing key '{pre}{key}' ({why})")
+        return get(key)
+
+    shape = get("section.shape")
     try:
         if shape == "explicit":
-            need = {k: _need(scene, f"section.{k}", "explicit section") for k in
+            vals = {k: need(f"section.{k}", "explicit section") for k in
                     ("EA", "GA", "EI1", "EI2", "GJ", "rhoA", "rhoI1", "rhoI2")}
-            rhoJ = scene["section.rhoJ"] if scene["section.rhoJ"] is not None else need["rhoI1"] + need["rhoI2"]
-            return SectionConstants(CN=(need["GA"], need["GA"], need["EA"]), CM=(need["EI1"], need["EI2"], need["GJ"]),
-                                    mu=need["rhoA"], Jm=(need["rhoI1"], need["rhoI2"], rhoJ))
-        E = _need(scene, "material.E", f"{shape} section")
-        rho = _need(scene, "material.rho", f"{shape} section")
-        material = Material(E=E, rho=rho, nu=scene["material.nu"], G=scene["material.G"])
-        k = scene["section.shear_factor"]
+            rhoJ = get("section.rhoJ") if get("section.rhoJ") is not None else vals["rhoI1"] + vals["rhoI2"]
+            return SectionConstants(CN=(vals["GA"], vals["GA"], vals["EA"]), CM=(vals["EI1"], vals["EI2"], vals["GJ"]),
+                                    mu=vals["rhoA"], Jm=(vals["rhoI1"], vals["rhoI2"], rhoJ))
+        E = need("material.E", f"{shape} section")
+        rho = need("material.rho", f"{shape} section")
+        material = Material(E=E, rho=rho, nu=get("material.nu"), G=get("material.G"))
+        k = get("section.shear_factor")
         if shape == "circle":
-            section = Section.circle(_need(scene, "section.d", "circle"), k)
+            section = Section.circle(need("section.d", "circle"), k)
         elif shape == "square":
-            section = Section.square(_need(scene, "section.t", "square"), k)
+            section = Section.square(need("section.t", "square"), k)
         else:
-            section = Section.rectangle(_need(scene, "section.b", "rectangle"), _need(scene, "section.h", "rectangle"), k)
+            section = Section.rectangle(need("section.b", "rectangle"), need("section.h", "rectangle"), k)
         return SectionConstants.from_material(material, section)
     except ParameterError as exc:
         prefix = "material" if exc.field in ("E", "rho", "nu", "G") else "section"
-        raise SceneError(f"{scene.source}: key '{prefix}.{exc.field}': {exc.reason}") from None
+        raise SceneError(f"{scene.source}: key '{pre}{prefix}.{exc.field}': {exc.reason}") from None
 
 
 def _profile(scene: Scene, pre: str) -> Profile:
@@ -402,7 +441,7 @@ _checked: tuple = (None, None)
 
 def _undamped(scene: Scene) -> BeamProblem:
     """The problem with ``kelvin_voigt = "auto"`` taken as 0 (sized by :func:`_sized`)."""
-    space, joint_loads = frame_space(scene)
+    space, joint_loads, sections = frame_space(scene)
     loads = Loads(distributed_force=scene["loads.distributed_force"], gravity=scene["loads.gravity"],
                   distributed_couple=scene["loads.distributed_couple"],
                   distributed_profile=_profile(scene, "loads"), start=_end_load(scene, "start"),
@@ -414,7 +453,7 @@ def _undamped(scene: Scene) -> BeamProblem:
         raise SceneError(f"{scene.source}: key 'motion.{end}.kind': {exc.reason}") from None
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
-    section = constants(scene)  # its own one-line errors, named by key
+    section = sections if sections is not None else constants(scene)  # one-line errors, named by key
     try:
         pb = BeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])

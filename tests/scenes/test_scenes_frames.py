@@ -117,3 +117,21 @@ def test_frame_outputs_read_back(tmp_path):
     for t, n in zip(ts, ns):
         force = np.array([0.0, 0.0, 50.0 * t])  # the pulse at t < 1 s
         assert np.linalg.norm(n[11] - n[10] + force) <= 1.5e-2 * max(np.max(np.abs(n)), 1.0)
+
+
+def test_members_with_their_own_sections():
+    """A [[beams]] entry may set its own section.* and material.* keys (the scene's fill in
+    the rest); the pieces of a split member keep its section."""
+    beams = [{"name": "column", "kind": "straight", "length": 3.0, "direction": [0, 0, 1.0]},
+             {"name": "arm", "kind": "straight", "length": 2.0, "direction": [1.0, 0, 0], "origin": [0, 0, 3.0],
+              "section": {"EI1": 200.0, "rhoA": 0.5}}]
+    sim = KINDS["beam"].build(load_scene("right_angle_cantilever", {
+        "beams": beams, "point_loads": [{"s": 0.8, "force": [0, 1.0, 0]}], "integrator.backend": "numpy"}))
+    pb = sim.problem
+    assert pb.space.offsets == (0, 11, 17, 23)  # the arm split at s = 4 m into 6 + 6
+    assert np.all(pb.mu[:11] == 1.0) and np.all(pb.mu[11:] == 0.5)
+    assert np.all(pb.CM[11:, 0] == 200.0) and np.all(pb.CM[11:, 1] == 1e3) and np.all(pb.CM[:11, 0] == 1e3)
+    with pytest.raises(SceneError, match="beams\\[1\\]: unknown key 'material.kelvin_voigt' \\(kelvin_voigt is set once"):
+        load_scene("right_angle_cantilever", {"beams": [beams[0], {**beams[1], "material": {"kelvin_voigt": 0.1}}]})
+    with pytest.raises(SceneError, match="beams\\[1\\]: key 'section.EI1' = -1.0: expected a positive number"):
+        load_scene("right_angle_cantilever", {"beams": [beams[0], {**beams[1], "section": {"EI1": -1.0}}]})

@@ -93,11 +93,14 @@ _X_NM, _X_RC, _X_N, _X_M, _X_TMP, X_COLS = 12, 18, 21, 24, 27, 33
 # (everything that may change outside this file - series length and coefficients, the
 # threshold - is run-time data: numba's cache only watches this file)
 # ---- layout of the parameter block ``prm`` inside ``sf`` -----------------------------
-# CN(3) CM(3) Jm(3) mu q(3) m_dist(3) has_q has_m threshold tau (Kelvin-Voigt) power (1: compute
-# the external power per stage, BeamProblem.quadrature_rate)
-_P_CN, _P_CM, _P_JM, _P_MU, _P_Q, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU, _P_POW = (0, 3, 6, 9, 10, 13, 16, 17, 18,
-                                                                                19, 20)
-_N_PRM = 21
+# distributed force q (3), gravity g (3) (the force per length at point i is q + mu_i g),
+# distributed couple m_dist (3), has_q, has_m, threshold, tau (Kelvin-Voigt), power (1:
+# compute the external power per stage, BeamProblem.quadrature_rate)
+_P_Q, _P_G, _P_M, _P_HASQ, _P_HASM, _P_THR, _P_TAU, _P_POW = 0, 3, 6, 9, 10, 11, 12, 13
+_N_PRM = 14
+# ---- per-point block ``geo`` (n, _GEO): Gamma0 (3), K0 (3), K0_s (3), then the section at
+# the point (one section per patch of a frame): CN (3), CM (3), Jm (3), mu
+_G_CN, _G_CM, _G_JM, _G_MU, _GEO = 9, 12, 15, 18, 19
 # per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
 # floats (normal, factor, force(3), couple(3))
 _NEI, _NEF = 7, 8
@@ -197,7 +200,7 @@ def _views(sf, si):
     prm = sf[si[_H_PRM]:si[_H_PRM] + _N_PRM]
     nt = si[_H_NT]
     ser = sf[si[_H_SER]:si[_H_SER] + 6 * nt].reshape((6, nt))
-    geo = sf[si[_H_GEO]:si[_H_GEO] + 9 * n].reshape((n, 9))
+    geo = sf[si[_H_GEO]:si[_H_GEO] + _GEO * n].reshape((n, _GEO))
     band = sf[si[_H_BAND]:si[_H_BAND] + 3 * n * W].reshape((3, n, W))
     lu = sf[si[_H_LU]:si[_H_LU] + n * nlu].reshape((n, nlu))
     nm = n if si[_H_DENSE] != 0 else 0
@@ -488,9 +491,7 @@ def joint_rows(x, v, w, R, sf, si, power):
     solve) and the joint's balance residuals ``r_n = n_b - n_a + F``, ``r_m = m_b - m_a + C``
     (material ``N, M`` read from ``x[:, _X_N]`` and ``x[:, _X_M]``). Returns the power of
     the joint loads."""
-    prm = sf[si[_H_PRM]:si[_H_PRM] + _N_PRM]
-    J = prm[_P_JM:_P_JM + 3]
-    mu = prm[_P_MU]
+    geo = sf[si[_H_GEO]:si[_H_GEO] + _GEO * si[_H_N]].reshape((si[_H_N], _GEO))
     jf, ji = _joint_views(sf, si)
     pwr = 0.0
     ra, rb = np.empty(3), np.empty(3)
@@ -509,11 +510,14 @@ def joint_rows(x, v, w, R, sf, si, power):
             pwr += (jf[k, 2] * v[a, 0] + jf[k, 3] * v[a, 1] + jf[k, 4] * v[a, 2]
                     + jf[k, 5] * w[a, 0] + jf[k, 6] * w[a, 1] + jf[k, 7] * w[a, 2])
         # spatial inertias R diag(J) R^T of both sections, and the torque sum
+        Ja0, Ja1, Ja2 = geo[a, _G_JM], geo[a, _G_JM + 1], geo[a, _G_JM + 2]
+        Jb0, Jb1, Jb2 = geo[b, _G_JM], geo[b, _G_JM + 1], geo[b, _G_JM + 2]
+        mu_a, mu_b = geo[a, _G_MU], geo[b, _G_MU]
         for d in range(3):
             rhs[d] = fac * rb[d]
             for e in range(3):
-                sa = R[a, d, 0] * J[0] * R[a, e, 0] + R[a, d, 1] * J[1] * R[a, e, 1] + R[a, d, 2] * J[2] * R[a, e, 2]
-                sb = R[b, d, 0] * J[0] * R[b, e, 0] + R[b, d, 1] * J[1] * R[b, e, 1] + R[b, d, 2] * J[2] * R[b, e, 2]
+                sa = R[a, d, 0] * Ja0 * R[a, e, 0] + R[a, d, 1] * Ja1 * R[a, e, 1] + R[a, d, 2] * Ja2 * R[a, e, 2]
+                sb = R[b, d, 0] * Jb0 * R[b, e, 0] + R[b, d, 1] * Jb1 * R[b, e, 1] + R[b, d, 2] * Jb2 * R[b, e, 2]
                 S[d, e] = sa + sb
                 rhs[d] += sa * x[a, 9 + e] + sb * x[b, 9 + e]
         # 3x3 symmetric positive definite solve: inverse = cofactors^T / det
@@ -526,7 +530,7 @@ def joint_rows(x, v, w, R, sf, si, power):
         for d in range(3):
             x[a, d] = x[b, d] = 0.5 * (x[a, d] + x[b, d])
             x[a, 3 + d] = x[b, 3 + d] = 0.5 * (x[a, 3 + d] + x[b, 3 + d])
-            x[a, 6 + d] = x[b, 6 + d] = 0.5 * (x[a, 6 + d] + x[b, 6 + d]) + fac * ra[d] / (2.0 * mu)
+            x[a, 6 + d] = x[b, 6 + d] = (mu_a * x[a, 6 + d] + mu_b * x[b, 6 + d] + fac * ra[d]) / (mu_a + mu_b)
         for d in range(3):
             x[a, 9 + d] = (inv[d, 0] * rhs[0] + inv[d, 1] * rhs[1] + inv[d, 2] * rhs[2]) / det
         for d in range(3):
@@ -555,11 +559,8 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
     lower, dense = si[_H_L], si[_H_DENSE] != 0
     # x: right-hand sides, row i = (v, w, n_s/mu, tq) rows of point i; Dirichlet rows
     # (prescribed zero rates, method.md section 3) are zero per row and field
-    CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
-    CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
-    J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
-    mu = prm[_P_MU]
-    qx, qy, qz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]
+    qdx, qdy, qdz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]  # distributed force, and gravity
+    gx, gy, gz = prm[_P_G], prm[_P_G + 1], prm[_P_G + 2]
     mx, my, mz = prm[_P_M], prm[_P_M + 1], prm[_P_M + 2]
     has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
     thr = prm[_P_THR]
@@ -569,6 +570,11 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
     power_sum = 0.0
     nj = si[_H_NJ]  # rigid joints: their rows are combined before the solve
     for i in range(n):
+        CN0, CN1, CN2 = geo[i, _G_CN], geo[i, _G_CN + 1], geo[i, _G_CN + 2]  # the section at point i
+        CM0, CM1, CM2 = geo[i, _G_CM], geo[i, _G_CM + 1], geo[i, _G_CM + 2]
+        J0, J1, J2 = geo[i, _G_JM], geo[i, _G_JM + 1], geo[i, _G_JM + 2]
+        mu = geo[i, _G_MU]
+        qx, qy, qz = qdx + mu * gx, qdy + mu * gy, qdz + mu * gz
         cs0 = cs1 = cs2 = css0 = css1 = css2 = 0.0
         vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
         js = j0[i]
@@ -766,11 +772,8 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
     prm, ser, geo, band, lu, minv, endf, endi, j0 = _views(sf, si)
     n, W, ne = c.shape[0], band.shape[2], endf.shape[0]
     lower, upper, dense = si[_H_L], si[_H_U], si[_H_DENSE] != 0
-    CN0, CN1, CN2 = prm[_P_CN], prm[_P_CN + 1], prm[_P_CN + 2]
-    CM0, CM1, CM2 = prm[_P_CM], prm[_P_CM + 1], prm[_P_CM + 2]
-    J0, J1, J2 = prm[_P_JM], prm[_P_JM + 1], prm[_P_JM + 2]
-    mu = prm[_P_MU]
-    qx, qy, qz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]
+    qdx, qdy, qdz = prm[_P_Q], prm[_P_Q + 1], prm[_P_Q + 2]  # distributed force, and gravity
+    gx, gy, gz = prm[_P_G], prm[_P_G + 1], prm[_P_G + 2]
     mx, my, mz = prm[_P_M], prm[_P_M + 1], prm[_P_M + 2]
     has_q, has_m = prm[_P_HASQ] != 0.0, prm[_P_HASM] != 0.0
     thr = prm[_P_THR]
@@ -781,6 +784,11 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
     nj = si[_H_NJ]  # rigid joints: their rows are combined before the solve
     # ---- pass 1: pointwise constitutive resultants
     for i in range(n):
+        CN0, CN1, CN2 = geo[i, _G_CN], geo[i, _G_CN + 1], geo[i, _G_CN + 2]  # the section at point i
+        CM0, CM1, CM2 = geo[i, _G_CM], geo[i, _G_CM + 1], geo[i, _G_CM + 2]
+        J0, J1, J2 = geo[i, _G_JM], geo[i, _G_JM + 1], geo[i, _G_JM + 2]
+        mu = geo[i, _G_MU]
+        qx, qy, qz = qdx + mu * gx, qdy + mu * gy, qdz + mu * gz
         cs0 = cs1 = cs2 = 0.0
         js = j0[i]
         for k in range(W):
@@ -844,6 +852,11 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
     _solve_cols(x, lu, lower, upper, minv, dense, True, _X_NM, _X_NM + 6, _X_TMP)
     # ---- pass 2: balance laws with the spline derivatives of the resultants
     for i in range(n):
+        CN0, CN1, CN2 = geo[i, _G_CN], geo[i, _G_CN + 1], geo[i, _G_CN + 2]  # the section at point i
+        CM0, CM1, CM2 = geo[i, _G_CM], geo[i, _G_CM + 1], geo[i, _G_CM + 2]
+        J0, J1, J2 = geo[i, _G_JM], geo[i, _G_JM + 1], geo[i, _G_JM + 2]
+        mu = geo[i, _G_MU]
+        qx, qy, qz = qdx + mu * gx, qdy + mu * gy, qdz + mu * gz
         vc0 = vc1 = vc2 = wc0 = wc1 = wc2 = th0 = th1 = th2 = 0.0
         ns0 = ns1 = ns2 = ms0 = ms1 = ms2 = 0.0
         js = j0[i]
@@ -1242,11 +1255,8 @@ class NumbaBeamKernels:
         self.bandwidth = bands.shape[2]
 
         prm = np.zeros(_N_PRM)
-        prm[_P_CN:_P_CN + 3] = pb.CN
-        prm[_P_CM:_P_CM + 3] = pb.CM
-        prm[_P_JM:_P_JM + 3] = pb.Jm
-        prm[_P_MU] = pb.mu
-        prm[_P_Q:_P_Q + 3] = pb.q
+        prm[_P_Q:_P_Q + 3] = pb.loads.distributed_force
+        prm[_P_G:_P_G + 3] = pb.loads.gravity
         prm[_P_M:_P_M + 3] = pb.m_dist
         prm[_P_HASQ] = float(pb.has_q)
         prm[_P_HASM] = float(pb.has_m)
@@ -1258,6 +1268,9 @@ class NumbaBeamKernels:
             geo = np.concatenate([pb.gamma0, pb.K0, pb.K0_s], axis=1)
         else:  # the NumPy path does not subtract K0, K0_s (zero up to round-off) here
             geo = np.concatenate([pb.gamma0, np.zeros((n, 6))], axis=1)
+        section = [np.broadcast_to(np.asarray(a, dtype=float), (n, k)) for a, k in
+                   ((pb.CN, 3), (pb.CM, 3), (pb.Jm, 3), (np.reshape(pb.mu, (-1, 1)), 1))]
+        geo = np.concatenate([geo, *section], axis=1)
 
         ends = pb.ends
         ne = len(ends)
@@ -1329,7 +1342,8 @@ class NumbaBeamKernels:
         self._profiles = [(offs[blk] + k * width[blk] + col, vec, prof) for blk, k, col, vec, prof in profiles]
         dprof = pb.loads.distributed_profile
         if not dprof.is_constant:  # distributed loads with a time profile
-            self._profiles += [(offs["prm"] + _P_Q, np.asarray(pb.q, float), dprof),
+            self._profiles += [(offs["prm"] + _P_Q, np.asarray(pb.loads.distributed_force, float), dprof),
+                               (offs["prm"] + _P_G, np.asarray(pb.loads.gravity, float), dprof),
                                (offs["prm"] + _P_M, np.asarray(pb.m_dist, float), dprof)]
         self._t_loads = None
         self._zero = np.zeros((4, n, 3))

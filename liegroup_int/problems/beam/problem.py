@@ -113,8 +113,9 @@ class BeamProblem(Problem):
     ----------
     space : CollocationSpace
         Basis, collocation points and reference geometry.
-    constants : SectionConstants
-        Stiffness and inertia per length (``SectionConstants.from_material``).
+    constants : SectionConstants or tuple of SectionConstants
+        Stiffness and inertia per length (``SectionConstants.from_material``); for a
+        :class:`~liegroup_int.iga.PatchedSpace`, one per patch (a frame of members).
     bcs : BoundaryConditions
     loads : Loads
     initial : InitialConditions
@@ -160,10 +161,7 @@ class BeamProblem(Problem):
         self.bcs, self.loads, self.initial = bcs, loads, initial
         n = space.n_ctrl
         self.n = n
-        self.CN = np.asarray(constants.CN, dtype=float)
-        self.CM = np.asarray(constants.CM, dtype=float)
-        self.mu = float(constants.mu)
-        self.Jm = np.asarray(constants.Jm, dtype=float)
+        self.CN, self.CM, self.mu, self.Jm = self._section_arrays(space, constants)
         self.N0, self.N1, self.N2 = space.N0, space.N1, space.N2
         self.gamma0 = rot_T(space.R0, space.c0_s)
         self.K0, self.K0_s = space.K0, space.K0_s
@@ -227,6 +225,36 @@ class BeamProblem(Problem):
             fix_position=kind in ("clamped", "hinged"), fix_rotation=kind == "clamped",
             force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load, motion=motion,
         )
+
+    @staticmethod
+    def _section_arrays(space, constants):
+        """``CN, CM, mu, Jm``: ``(3,), (3,), float, (3,)`` for one section; per collocation
+        point ``(n, 3), (n, 3), (n, 1), (n, 3)`` for one section per patch of a
+        :class:`~liegroup_int.iga.PatchedSpace` (a tuple of :class:`SectionConstants`)."""
+        if isinstance(constants, SectionConstants):
+            return (np.asarray(constants.CN, dtype=float), np.asarray(constants.CM, dtype=float),
+                    float(constants.mu), np.asarray(constants.Jm, dtype=float))
+        sections = tuple(constants)
+        patches = getattr(space, "patches", None)
+        if patches is None or len(sections) != len(patches) or not all(
+                isinstance(c, SectionConstants) for c in sections):
+            raise ValueError("constants: one SectionConstants, or one per patch of a PatchedSpace "
+                             f"({len(patches) if patches else 1} patch(es), got {len(sections)})")
+        if all(c == sections[0] for c in sections):
+            return BeamProblem._section_arrays(space, sections[0])
+        sizes = [sp.n_ctrl for sp in patches]
+
+        def per_point(get):
+            return np.repeat(np.array([np.broadcast_to(np.asarray(get(c), float), (3,)) for c in sections]),
+                             sizes, axis=0)
+
+        return (per_point(lambda c: c.CN), per_point(lambda c: c.CM), per_point(lambda c: c.mu)[:, :1],
+                per_point(lambda c: c.Jm))
+
+    def _at(self, a, i: int):
+        """Row ``i`` of a per-point constant (or the constant itself)."""
+        a = np.asarray(a)
+        return a[i] if a.ndim == 2 else a
 
     @staticmethod
     def _joints(space, loads) -> tuple:
@@ -413,7 +441,6 @@ class BeamProblem(Problem):
         (and ``m_b - m_a + C``); the common translational rate is the mass-weighted mean of
         the two rows, the angular one the inertia-weighted mean (spatial inertias
         ``R J R^T`` of both sections)."""
-        J = np.diag(self.Jm)
         for j in self.joints:
             a, b = j.a, j.b
             r_n = R[b] @ N[b] - R[a] @ N[a]
@@ -422,8 +449,10 @@ class BeamProblem(Problem):
                 r_n = r_n + self._end_force(j.load, t, R[a])
                 r_m = r_m + self._end_couple(j.load, t, R[a])
             fac = j.factor_a + j.factor_b
-            Ia, Ib = R[a] @ J @ R[a].T, R[b] @ J @ R[b].T
-            lin = 0.5 * (rhs[a, 2] + rhs[b, 2]) + fac * r_n / (2.0 * self.mu)
+            Ia = R[a] @ np.diag(self._at(self.Jm, a)) @ R[a].T
+            Ib = R[b] @ np.diag(self._at(self.Jm, b)) @ R[b].T
+            mu_a, mu_b = float(np.ravel(self._at(self.mu, a))[0]), float(np.ravel(self._at(self.mu, b))[0])
+            lin = (mu_a * rhs[a, 2] + mu_b * rhs[b, 2] + fac * r_n) / (mu_a + mu_b)
             ang = np.linalg.solve(Ia + Ib, Ia @ rhs[a, 3] + Ib @ rhs[b, 3] + fac * r_m)
             for f, val in ((0, 0.5 * (rhs[a, 0] + rhs[b, 0])), (1, 0.5 * (rhs[a, 1] + rhs[b, 1])), (2, lin), (3, ang)):
                 rhs[a, f] = rhs[b, f] = val
@@ -475,7 +504,7 @@ class BeamProblem(Problem):
         if self.has_q or self.has_m:
             f = self.loads.distributed_profile(t)
             if self.has_q:
-                p += f * float(self.q @ (self.quad @ (self.N0 @ y.v)))
+                p += f * float(np.sum(self.quad[:, None] * self.q * (self.N0 @ y.v)))
             if self.has_m:
                 p += f * float(self.m_dist @ (self.quad @ (self.N0 @ y.w)))
         if self.moving_ends:  # the moving support's couple on the end's angular velocity
@@ -508,9 +537,9 @@ class BeamProblem(Problem):
         _, gam, _ = strains(R, self.N1 @ y.c, self.N2 @ y.c, K, self.gamma0)
         KM = K - self.K0
         Om = rot_T(R, w_c)
-        kin = 0.5 * (self.mu * np.sum(v_c**2, axis=1) + np.sum(self.Jm * Om**2, axis=1))
+        kin = 0.5 * (np.sum(self.mu * v_c**2, axis=1) + np.sum(self.Jm * Om**2, axis=1))
         strain = 0.5 * (np.sum(self.CN * gam**2, axis=1) + np.sum(self.CM * KM**2, axis=1))
-        pot = -(c_c @ self.q) * self.loads.distributed_profile(t) if self.has_q else np.zeros(self.n)
+        pot = -np.sum(c_c * self.q, axis=1) * self.loads.distributed_profile(t) if self.has_q else np.zeros(self.n)
         potential = float(self.quad @ pot)
         for e in self.neumann_ends:
             ld = e.load
