@@ -128,3 +128,41 @@ def test_stepped_cantilever_frequencies():
     f = np.array([m.freq_hz for m in modal_analysis(pb, 0.0, pb.initial_state(), 6).modes])
     bending = 0.5 * (f[0::2] + f[1::2])  # isotropic sections: a pair per bending mode
     assert np.allclose(bending, ref, rtol=1e-3, atol=0), (bending, ref)
+
+
+@pytest.mark.parametrize("formulation", ["primal", "mixed"])
+@pytest.mark.parametrize("patches", [1, 2])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_hanging_bar_at_rest_reaction_equals_weight(formulation, patches, backend):
+    """A bar hanging from a clamp under gravity, in its static equilibrium: axial strain
+    eps(s) = rhoA g (L - s) / EA, a quadratic centreline that the spline space holds
+    exactly (p = 4). The stage rates vanish and the clamp's reaction force is the weight
+    rhoA g L, to round-off (one patch, and two patches joined mid-length). Round-off here
+    is that of the axial stiffness term, EA / (rhoA h^2) L = 6.5e7 m/s^2 at h = L / 14:
+    the rates measured at most 2.2e-7 m/s^2 (3e-15 of it, where an unbalanced state has
+    rates of g = 9.81), allowed 1e-13 of it. The reaction EA eps(0) carries the strain's
+    round-off times EA: measured 4.1e-11 N against the weight 29.43 N, allowed
+    1e-14 EA = 1e-9 N."""
+    L, g, EA, rhoA = 2.0, 9.81, 1e5, 1.5
+    sec = SectionConstants(CN=(4e4, 4e4, EA), CM=(50.0, 50.0, 40.0), mu=rhoA, Jm=(1e-3, 1e-3, 2e-3))
+    down = (0.0, 0.0, -1.0)
+    if patches == 1:
+        sp = CollocationSpace(straight(L, down, 4, 15))
+    else:
+        sp = PatchedSpace([CollocationSpace(straight(L / 2, down, 4, 9)),
+                           CollocationSpace(straight(L / 2, down, 4, 9, origin=(0, 0, -L / 2)))])
+    pb = BeamProblem(sp, sec, BoundaryConditions("clamped", "free"), Loads(gravity=(0.0, 0.0, -g)), backend=backend,
+                     formulation=formulation)
+    y = pb.initial_state()
+    s = np.asarray(sp.s_c)
+    z = -(s + rhoA * g * (L * s - 0.5 * s**2) / EA)  # integral of 1 + eps
+    y.c = sp.solve(np.stack([0 * s, 0 * s, z], axis=1))
+    f = pb.vector_field(0.0, y)
+    h = float(np.min(np.diff(s)[np.diff(s) > 0]))
+    assert np.max(np.abs(f)) <= 1e-13 * EA / (rhoA * h**2) * L, np.max(np.abs(f))
+    y0 = pb.initial_state()  # unstretched: not in equilibrium, the bar falls at g
+    assert np.max(np.abs(pb.vector_field(0.0, y0)[2])) >= g
+    force, couple = pb.reactions(y)["start"]
+    weight = rhoA * g * L
+    assert np.allclose(force, [0.0, 0.0, weight], rtol=0, atol=1e-14 * EA), force
+    assert np.max(np.abs(couple)) <= 1e-12 * weight * L
