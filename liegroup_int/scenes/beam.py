@@ -43,6 +43,15 @@ def _end_keys(end: str) -> list[Key]:
         Key(f"motion.{end}.rate", "float", 0.0, "final angular speed of a spin_up", "rad/s"),
         Key(f"motion.{end}.amplitude", "float", 0.0, "amplitude of a harmonic rotation", "rad"),
         Key(f"motion.{end}.time", "float", 1.0, "spin-up duration, or period of the harmonic rotation", "s", positive),
+        Key(f"translation.{end}.kind", "str", "none", f"prescribed displacement d(t) of the clamped or hinged end at "
+            f"{at} along translation.{end}.axis: speed_up (from rest to translation.{end}.rate over "
+            f"translation.{end}.time, zero acceleration at both ends) or harmonic (amplitude sin(2 pi t / time)); "
+            "base excitation", choices=("none", "speed_up", "harmonic")),
+        Key(f"translation.{end}.axis", "vec3", (0.0, 0.0, 1.0), "direction of the prescribed displacement"),
+        Key(f"translation.{end}.rate", "float", 0.0, "final speed of a speed_up", "m/s"),
+        Key(f"translation.{end}.amplitude", "float", 0.0, "amplitude of a harmonic displacement", "m"),
+        Key(f"translation.{end}.time", "float", 1.0, "speed-up duration, or period of the harmonic displacement", "s",
+            positive),
         Key(f"loads.{end}.force", "vec3", ZERO, f"force at {at} (spatial, dead load; material frame if follower)",
             "N"),
         Key(f"loads.{end}.couple", "vec3", ZERO, f"couple at {at} (spatial; material frame if follower)", "N m"),
@@ -411,6 +420,18 @@ def _motion(scene: Scene, end: str) -> SupportMotion | None:
         raise SceneError(f"{scene.source}: key '{pre}.{exc.field}': {exc.reason}") from None
 
 
+def _translation(scene: Scene, end: str) -> SupportMotion | None:
+    pre = f"translation.{end}"
+    kind = scene[f"{pre}.kind"]
+    if kind == "none":
+        return None
+    try:
+        return SupportMotion("spin_up" if kind == "speed_up" else kind, scene[f"{pre}.axis"], scene[f"{pre}.rate"],
+                             scene[f"{pre}.amplitude"], scene[f"{pre}.time"])
+    except ParameterError as exc:
+        raise SceneError(f"{scene.source}: key '{pre}.{exc.field}': {exc.reason}") from None
+
+
 def _end_load(scene: Scene, end: str) -> EndLoad:
     pre = f"loads.{end}"
     prof = _profile(scene, pre)
@@ -447,10 +468,12 @@ def _undamped(scene: Scene) -> BeamProblem:
                   distributed_profile=_profile(scene, "loads"), start=_end_load(scene, "start"),
                   end=_end_load(scene, "end"), joints=joint_loads)
     try:
-        bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"], _motion(scene, "start"), _motion(scene, "end"))
+        bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"], _motion(scene, "start"), _motion(scene, "end"),
+                                 _translation(scene, "start"), _translation(scene, "end"))
     except ParameterError as exc:
         end = "start" if exc.field.startswith("start") else "end"
-        raise SceneError(f"{scene.source}: key 'motion.{end}.kind': {exc.reason}") from None
+        table = "translation" if exc.field.endswith("translation") else "motion"
+        raise SceneError(f"{scene.source}: key '{table}.{end}.kind': {exc.reason}") from None
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key

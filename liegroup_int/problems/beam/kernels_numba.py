@@ -101,9 +101,10 @@ _N_PRM = 14
 # ---- per-point block ``geo`` (n, _GEO): Gamma0 (3), K0 (3), K0_s (3), then the section at
 # the point (one section per patch of a frame): CN (3), CM (3), Jm (3), mu
 _G_CN, _G_CM, _G_JM, _G_MU, _GEO = 9, 12, 15, 18, 19
-# per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann),
-# floats (normal, factor, force(3), couple(3))
-_NEI, _NEF = 7, 8
+# per end: ints (index, fix_position, fix_rotation, force_neumann, moment_neumann, follower,
+# prescribed rotation, prescribed displacement), floats (normal, factor, force(3) or the
+# prescribed angular acceleration, couple(3), prescribed acceleration(3))
+_NEI, _NEF = 8, 11
 # per joint: ints (row a, row b), floats (factor_a, factor_b, force(3), couple(3))
 _NJI, _NJF = 2, 8
 
@@ -695,10 +696,16 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
             power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
         # enhanced collocation at Neumann ends
         moving = -1
+        sliding = -1
         for e in range(ne):
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 7] != 0:  # a translating support: prescribed acceleration in endf[e, 8:11]
+                sliding = e
+                if power:  # the support's force nrm n on the end's velocity
+                    power_sum += nrm * ((r00 * N0_ + r01 * N1_ + r02 * N2_) * vc0 + (r10 * N0_ + r11 * N1_ + r12 * N2_) * vc1
+                                        + (r20 * N0_ + r21 * N1_ + r22 * N2_) * vc2)
             if endi[e, 6] != 0:  # a moving support: prescribed angular acceleration in endf[e, 2:5]
                 moving = e
                 if power:  # the support's couple nrm m on the end's angular velocity
@@ -737,6 +744,8 @@ def rates_into(c, v, w, R, K, Ks, u, sf, si, fixp, fixr, x, out, pw):
         else:
             x[i, 0], x[i, 1], x[i, 2] = vc0, vc1, vc2
             x[i, 6], x[i, 7], x[i, 8] = ns0 / mu, ns1 / mu, ns2 / mu
+            if sliding >= 0:
+                x[i, 6], x[i, 7], x[i, 8] = endf[sliding, 8], endf[sliding, 9], endf[sliding, 10]
         if fixr[i]:
             x[i, 3] = x[i, 4] = x[i, 5] = x[i, 9] = x[i, 10] = x[i, 11] = 0.0
         else:
@@ -904,10 +913,16 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
         if power and (has_q or has_m):  # int (q . v + m_d . omega) ds by the collocation quadrature
             power_sum += quad[i] * (qx * vc0 + qy * vc1 + qz * vc2 + mx * wc0 + my * wc1 + mz * wc2)
         moving = -1
+        sliding = -1
         for e in range(ne):  # enhanced collocation at Neumann ends
             if endi[e, 0] != i:
                 continue
             nrm, fac = endf[e, 0], endf[e, 1]
+            if endi[e, 7] != 0:  # a translating support: prescribed acceleration in endf[e, 8:11]
+                sliding = e
+                if power:  # the support's force nrm n on the end's velocity
+                    power_sum += nrm * ((r00 * N0_ + r01 * N1_ + r02 * N2_) * vc0 + (r10 * N0_ + r11 * N1_ + r12 * N2_) * vc1
+                                        + (r20 * N0_ + r21 * N1_ + r22 * N2_) * vc2)
             if endi[e, 6] != 0:  # a moving support: prescribed angular acceleration in endf[e, 2:5]
                 moving = e
                 if power:  # the support's couple nrm m on the end's angular velocity
@@ -942,6 +957,8 @@ def rates_into_mixed(c, v, w, R, K, u, sf, si, fixp, fixr, x, out, pw):
         else:
             x[i, 0], x[i, 1], x[i, 2] = vc0, vc1, vc2
             x[i, 6], x[i, 7], x[i, 8] = ns0 / mu, ns1 / mu, ns2 / mu
+            if sliding >= 0:
+                x[i, 6], x[i, 7], x[i, 8] = endf[sliding, 8], endf[sliding, 9], endf[sliding, 10]
         if fixr[i]:
             x[i, 3] = x[i, 4] = x[i, 5] = x[i, 9] = x[i, 10] = x[i, 11] = 0.0
         else:
@@ -1279,8 +1296,13 @@ class NumbaBeamKernels:
         profiles = []  # (block, row, first column, base vector, profile) of non-constant loads
         for k, e in enumerate(ends):
             endi[k] = (e.index, e.fix_position, e.fix_rotation, e.force_neumann, e.moment_neumann, e.load.follower,
-                       e.motion is not None)
+                       e.motion is not None, e.translation is not None)
             endf[k, 0], endf[k, 1] = e.normal, e.factor
+            if e.translation is not None:  # prescribed acceleration, per stage time
+                scale, prof = e.translation.acceleration_profile()
+                a = scale * e.translation.unit_axis
+                endf[k, 8:11] = a * prof(0.0)
+                profiles.append(("endf", k, 8, a, prof))
             if e.motion is not None:  # prescribed angular acceleration, per stage time
                 scale, prof = e.motion.acceleration_profile()
                 a = scale * e.motion.unit_axis

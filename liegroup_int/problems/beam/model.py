@@ -345,12 +345,17 @@ class SupportMotion:
 class BoundaryConditions:
     """End conditions: ``clamped`` (position and rotation fixed), ``hinged`` (position
     fixed, moment-free), ``free`` (force- and moment-free, or loaded); a clamped end may
-    follow a prescribed rotation (``start_motion``, ``end_motion``: :class:`SupportMotion`)."""
+    follow a prescribed rotation (``start_motion``, ``end_motion``: :class:`SupportMotion`),
+    and a clamped or hinged end a prescribed displacement (``start_translation``,
+    ``end_translation``: a :class:`SupportMotion` read as a displacement ``d(t)`` [m]
+    along its axis, e.g. base excitation)."""
 
     start: str = "clamped"
     end: str = "free"
     start_motion: SupportMotion | None = None
     end_motion: SupportMotion | None = None
+    start_translation: SupportMotion | None = None
+    end_translation: SupportMotion | None = None
 
     def __post_init__(self):
         for name in ("start", "end"):
@@ -359,6 +364,9 @@ class BoundaryConditions:
             if getattr(self, f"{name}_motion") is not None and getattr(self, name) != "clamped":
                 raise ParameterError(f"{name}_motion", f"a prescribed rotation needs a clamped end, not "
                                                        f"{getattr(self, name)!r}")
+            if getattr(self, f"{name}_translation") is not None and getattr(self, name) == "free":
+                raise ParameterError(f"{name}_translation", "a prescribed displacement needs a clamped or hinged "
+                                                            "end, not 'free'")
 
 
 @dataclass(frozen=True)

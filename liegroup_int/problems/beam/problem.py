@@ -71,6 +71,7 @@ class _End:
     moment_neumann: bool
     load: object
     motion: object = None  # SupportMotion of a clamped end: its rotation rows are prescribed
+    translation: object = None  # SupportMotion read as a displacement: its position rows are prescribed
 
 
 @dataclass(frozen=True)
@@ -171,17 +172,20 @@ class BeamProblem(Problem):
         self.m_dist = np.asarray(loads.distributed_couple, float)
         self.has_m = bool(np.any(self.m_dist))
         self.ends = tuple(
-            e for e in (self._end(0, -1.0, bcs.start, loads.start, space.l_s_start, bcs.start_motion),
-                        self._end(n - 1, 1.0, bcs.end, loads.end, space.l_s_end, bcs.end_motion))
+            e for e in (self._end(0, -1.0, bcs.start, loads.start, space.l_s_start, bcs.start_motion,
+                                  bcs.start_translation),
+                        self._end(n - 1, 1.0, bcs.end, loads.end, space.l_s_end, bcs.end_motion, bcs.end_translation))
         )
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
+        self.translating_ends = tuple(e for e in self.ends if e.translation is not None)
         self.neumann_ends = tuple(e for e in self.ends if e.force_neumann or e.moment_neumann)
         self.joints = self._joints(space, loads)
         self.quad = quadrature_weights(space)
         self._fix_rows = self._dirichlet_mask()
         # loads that do work, or viscous dissipation: the drivers then integrate their
         # power (quadrature_rate)
-        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends or any(
+        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
+                                   or self.translating_ends or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
             for e in self.neumann_ends) or any(j.load is not None for j in self.joints))
         # --- backend selection (compiled kernels: kernels_numba.py) -------------------
@@ -213,7 +217,7 @@ class BeamProblem(Problem):
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
-    def _end(index, normal, kind, load, l_s, motion=None):
+    def _end(index, normal, kind, load, l_s, motion=None, translation=None):
         if kind == "clamped" and load.active:
             raise ValueError(f"loads.{'start' if normal < 0 else 'end'}: a load on a clamped end does no work; "
                              "remove it or free the end")
@@ -224,6 +228,7 @@ class BeamProblem(Problem):
             index=index, normal=normal, factor=C_STAR / l_s,
             fix_position=kind in ("clamped", "hinged"), fix_rotation=kind == "clamped",
             force_neumann=kind == "free", moment_neumann=kind in ("free", "hinged"), load=load, motion=motion,
+            translation=translation,
         )
 
     @staticmethod
@@ -277,7 +282,7 @@ class BeamProblem(Problem):
         (fields: position, rotation, velocity, angular velocity)."""
         mask = np.zeros((self.n, 4), dtype=bool)
         for e in self.ends:
-            if e.fix_position:
+            if e.fix_position and e.translation is None:  # a moving support: rows set in _rates
                 mask[e.index, [0, 2]] = True
             if e.fix_rotation and e.motion is None:  # a moving support: rows set in _rates
                 mask[e.index, [1, 3]] = True
@@ -298,6 +303,8 @@ class BeamProblem(Problem):
             if e.fix_position and np.any(v[e.index]):
                 raise ValueError(f"initial: the velocity field moves the supported end at s = "
                                  f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
+            if e.translation is not None:  # prescribed displacement d(t) a: d(0) = 0 for both kinds
+                v[e.index] = e.translation.velocity(0.0) * e.translation.unit_axis
             if e.motion is not None:
                 a = e.motion.unit_axis
                 if np.any(omega) and not np.allclose(omega, e.motion.velocity(0.0) * a, rtol=1e-12, atol=0.0):
@@ -430,6 +437,8 @@ class BeamProblem(Problem):
         rhs[:, 3] = rot(R, tq / self.Jm)
         for e in self.moving_ends:  # prescribed angular acceleration theta''(t) a (spatial)
             rhs[e.index, 3] = e.motion.acceleration(t) * e.motion.unit_axis
+        for e in self.translating_ends:  # prescribed acceleration d''(t) a
+            rhs[e.index, 2] = e.translation.acceleration(t) * e.translation.unit_axis
         if self.joints:
             self._joint_rows(rhs, t, R, N, M)
         return rhs
@@ -507,10 +516,12 @@ class BeamProblem(Problem):
                 p += f * float(np.sum(self.quad[:, None] * self.q * (self.N0 @ y.v)))
             if self.has_m:
                 p += f * float(self.m_dist @ (self.quad @ (self.N0 @ y.w)))
-        if self.moving_ends:  # the moving support's couple on the end's angular velocity
-            m = self.section_fields(y, ("m",))["m"]
+        if self.moving_ends or self.translating_ends:  # moving supports: their couple on the
+            f = self.section_fields(y, ("n", "m"))  # end's angular velocity, their force on its velocity
             for e in self.moving_ends:
-                p += float(np.dot(e.normal * m[e.index], y.w[e.index]))
+                p += float(np.dot(e.normal * f["m"][e.index], y.w[e.index]))
+            for e in self.translating_ends:
+                p += float(np.dot(e.normal * f["n"][e.index], y.v[e.index]))
         for e in self.neumann_ends:
             ld = e.load
             R_end = y.R[e.index]  # the end is a collocation point
