@@ -1,8 +1,9 @@
 """liegroup_int: high-order explicit Runge-Kutta-Munthe-Kaas integration on Lie groups."""
 
-from .groups import SE3, SO3, LieGroup, Power, Product, Rn
+from .groups import SE3, SO3, LieGroup, Power, Product, Rn, SOn
 from .integrators import (
     METHODS,
+    ActionProblem,
     BlowUpError,
     DiagnosticsRecorder,
     GroupProblem,
@@ -13,11 +14,13 @@ from .integrators import (
     integrate,
     resolve_method,
 )
+from .manifolds import HomogeneousSpace, Isospectral, ProductSpace, RnSpace, Sphere, Stiefel
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "SO3", "SE3", "Rn", "Product", "Power", "LieGroup", "integrate", "Problem", "GroupProblem",
+    "SO3", "SE3", "SOn", "Rn", "Product", "Power", "LieGroup", "integrate", "Problem", "GroupProblem",
+    "ActionProblem", "HomogeneousSpace", "Sphere", "Stiefel", "Isospectral", "RnSpace", "ProductSpace",
     "Solution", "StateRecorder", "DiagnosticsRecorder", "METHODS", "resolve_method",
     "IntegrationError", "BlowUpError", "__version__",
 ]

@@ -4,7 +4,7 @@ from .api import integrate
 from .drivers import MAX_INCREMENT_ANGLE, initial_step, integrate_adaptive, integrate_fixed
 from .methods import METHODS, is_adaptive, resolve_method
 from .observers import DiagnosticsRecorder, Observers, StateRecorder
-from .problem import GroupProblem, Problem
+from .problem import ActionProblem, GroupProblem, Problem
 from .result import BlowUpError, IntegrationError, Solution, Stats, StepSizeError
 from .spectrum import GrowthReport, ModalReport, Mode, eigenvalues, growth_check, jacobian, modal_analysis, spectral_radius
 from .stepsize import StableStep, stable_step
@@ -13,7 +13,7 @@ from .rkmk import combine, compute_stages, error_estimate, error_norm, rkmk_step
 __all__ = [
     "integrate", "integrate_fixed", "integrate_adaptive", "initial_step", "MAX_INCREMENT_ANGLE",
     "METHODS", "resolve_method", "is_adaptive", "StateRecorder", "DiagnosticsRecorder", "Observers",
-    "Problem", "GroupProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
+    "Problem", "GroupProblem", "ActionProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
     "combine", "eigenvalues", "growth_check", "GrowthReport", "jacobian", "spectral_radius", "modal_analysis",
     "ModalReport", "Mode", "StableStep", "stable_step", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
 ]

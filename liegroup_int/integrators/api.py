@@ -10,7 +10,7 @@ from ..groups import LieGroup, Product, Rn
 from .drivers import MAX_INCREMENT_ANGLE, integrate_adaptive, integrate_fixed
 from .methods import resolve_method
 from .observers import StateRecorder
-from .problem import GroupProblem, Problem
+from .problem import ActionProblem, GroupProblem, Problem
 from .result import Solution
 
 
@@ -39,8 +39,10 @@ def integrate(
         Initial point; for a :class:`Product` space a tuple of factor points is joined.
     t_span : (float, float)
         ``(t0, t_end)``.
-    space : LieGroup, optional
-        Defaults to ``Rn(len(y0))`` (classical RK).
+    space : LieGroup or HomogeneousSpace, optional
+        Defaults to ``Rn(len(y0))`` (classical RK). A homogeneous space
+        (:mod:`liegroup_int.manifolds`: ``Sphere``, ``Stiefel``, ``Isospectral``, ...) takes
+        ``f(t, y)`` in its group's algebra and steps by the group's action on ``y``.
     method : str
         ``"rkmk1"`` (Lie-Euler), ``"rkmk2"``, ``"rkmk3"``, ``"rkmk4"``, ``"rkmk6"``,
         embedded pairs ``"rkmk32"``, ``"rkmk45"``, ``"rkmk65"``, or a tableau name.
@@ -73,6 +75,12 @@ def integrate(
     """
     if isinstance(f, Problem):
         problem = f
+    elif space is not None and not isinstance(space, LieGroup):
+        # a homogeneous space (liegroup_int.manifolds); a group without a closed-form
+        # dexpinv gets its Bernoulli series truncated to the method's order
+        series = type(space.group).dexpinv is LieGroup.dexpinv
+        problem = ActionProblem(space, f, dexpinv_order=resolve_method(method).order - 1 if series else None)
+        y0 = np.asarray(y0, dtype=float)
     else:
         if space is None:
             y0 = np.asarray(y0, dtype=float)

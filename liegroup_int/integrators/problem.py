@@ -271,3 +271,54 @@ class GroupProblem(Problem):
                 or any(getattr(type(self), m) is not getattr(GroupProblem, m) for m in own)):
             return None
         return group_problem_kernels(self)
+
+
+class ActionProblem(Problem):
+    """An ODE on a homogeneous space, ``dy/dt = f(t, y) . y`` (Munthe-Kaas's RKMK on
+    manifolds): ``y`` on ``space`` (a :class:`~liegroup_int.manifolds.HomogeneousSpace`),
+    ``f(t, y)`` in the algebra of ``space.group``, increments ``u`` in that algebra, and
+    the step ``y_{n+1} = Lambda(exp(u), y_n)``.
+
+    Parameters
+    ----------
+    space : HomogeneousSpace
+    f : callable
+        ``f(t, y) -> xi``, shape ``(..., space.group.dim)``: the infinitesimal generator
+        whose action moves ``y`` (``dy/dt = d/ds Lambda(exp(s xi), y)`` at ``s = 0``).
+    dexpinv_order : int, optional
+        Truncate the Bernoulli series of ``dexpinv`` after ``ad_u^k`` with ``k`` this
+        order (Munthe-Kaas: a method of order ``q`` needs ``k <= q - 1``, since
+        ``u = O(h)``). ``None``: the group's own ``dexpinv`` (closed form, or its series
+        to convergence).
+    """
+
+    def __init__(self, space, f: Callable[[float, np.ndarray], np.ndarray], dexpinv_order: int | None = None):
+        from ..manifolds import HomogeneousSpace
+
+        if not isinstance(space, HomogeneousSpace):
+            raise TypeError(f"ActionProblem: space must be a HomogeneousSpace, got {space!r}")
+        if dexpinv_order is not None and int(dexpinv_order) < 0:
+            raise ValueError(f"dexpinv_order: expected an integer >= 0, got {dexpinv_order!r}")
+        self.space, self.f = space, f
+        self.dexpinv_order = None if dexpinv_order is None else int(dexpinv_order)
+        self._ndim = len(space.point_shape)
+
+    def action(self, u, y):
+        return self.space.retract(u, y)
+
+    def dexpinv(self, u, w):
+        if self.dexpinv_order is not None:
+            return self.space.group.dexpinv_series(u, w, self.dexpinv_order)
+        return self.space.dexpinv(u, w)
+
+    def increment_rate(self, t, y, u):
+        return self.dexpinv(u, np.asarray(self.f(t, y), dtype=float))
+
+    def vector_field(self, t, y):
+        return np.asarray(self.f(t, y), dtype=float)
+
+    def zero_increment(self, y):
+        return np.zeros(np.shape(y)[: np.ndim(y) - self._ndim] + (self.space.group.dim,))
+
+    def rotation_angle(self, u):
+        return float(np.max(self.space.rotation_angle(u), initial=0.0))
