@@ -16,7 +16,7 @@ from ..tableaux import ButcherTableau
 from .controller import DEFAULT_CONTROLLER, PIController, h_accepted, h_rejected, rotation_cap, rotation_rate
 from .problem import Problem
 from .result import BlowUpError, Stats, StepSizeError
-from .rkmk import error_estimate, error_norm, rkmk_step_fsal, step_quadrature
+from .rkmk import cf_step, error_estimate, error_norm, rkmk_step_fsal, step_quadrature
 
 #: Default bound on the rotation angle of one step's increment [rad]. The closed-form
 #: dexpinv of SO(3) has its pole at 2 pi; 1 rad keeps every stage far from it.
@@ -137,7 +137,8 @@ def integrate_fixed(
         raise ValueError(f"dt must be positive, got {dt!r}")
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    stepper = _compiled(problem, tab, monitor)
+    cf = getattr(tab, "kind", "") == "commutator_free"  # several exponentials per stage, no dexpinv
+    stepper = _compiled(problem, tab, monitor) if not cf else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
@@ -158,7 +159,11 @@ def integrate_fixed(
         for i in range(n):
             t_next = stop if i == n - 1 else t_start + (i + 1) * dt
             h = t_next - t
-            y, u, f_last = rkmk_step_fsal(problem, tab, t, y, h, K, Q, f0, fsal)
+            if cf:
+                y, u = cf_step(problem, tab, t, y, h, K, Q)
+                f_last = None
+            else:
+                y, u, f_last = rkmk_step_fsal(problem, tab, t, y, h, K, Q, f0, fsal)
             stats.rhs_evals += tab.stages - (f0 is not None)
             f0 = f_last
             _check_finite(u, t_next, stats.steps + 1)

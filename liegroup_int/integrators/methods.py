@@ -7,12 +7,13 @@ derived from it, so scenes, the CLI and ``integrate`` accept the same names.
 
 from __future__ import annotations
 
+from ..tableaux import CF_REGISTRY
 from ..tableaux import REGISTRY as TABLEAUX
 from ..tableaux import ButcherTableau, resolve
 
 #: RKMK method name -> tableau name (``"rkmk4" -> "rk4"``). On R^n problems they are
 #: classical RK.
-METHODS: dict[str, str] = {tab.method: tab.name for tab in TABLEAUX.values() if tab.method}
+METHODS: dict[str, str] = {tab.method: tab.name for tab in [*TABLEAUX.values(), *CF_REGISTRY.values()] if tab.method}
 
 
 def resolve_method(method: "str | ButcherTableau") -> ButcherTableau:

@@ -101,6 +101,33 @@ def rkmk_step_fsal(problem: Problem, tab: ButcherTableau, t: float, y, h: float,
     return problem.end_step(problem.action(u, y)), u, None
 
 
+def cf_step(problem: Problem, tab, t: float, y, h: float, F: np.ndarray, Q: np.ndarray | None = None):
+    """One commutator-free (or Crouch-Grossman) step (:mod:`liegroup_int.tableaux.commutator_free`).
+
+    ``F[j] = f(t + c_j h, Y_j)`` (the vector field, no dexpinv) into ``F`` ``(s, ...)``;
+    stage ``i`` starts from ``y`` and applies the action of each of its exponentials'
+    increments ``h sum_j alpha_j F_j`` in turn; so does the step with the final rows.
+    ``Q[i]`` receives the quadrature rate at stage ``i`` when given. Returns
+    ``(y_new, u_max)``: the end state and the largest final increment (its rotation angle
+    is the step's).
+    """
+    for i in range(tab.stages):
+        y_i = y
+        for row in tab.stage_rows_f[i]:
+            y_i = problem.action(combine(row[:i], F, h), y_i)
+        F[i] = problem.vector_field(t + tab.c_f[i] * h, y_i)
+        if Q is not None:
+            Q[i] = problem.quadrature_rate(t + tab.c_f[i] * h, y_i)
+    y_new, u_max, angle = y, None, -1.0
+    for row in tab.final_rows_f:
+        u = combine(row, F, h)
+        y_new = problem.action(u, y_new)
+        a = problem.rotation_angle(u)
+        if a > angle:
+            u_max, angle = u, a
+    return problem.end_step(y_new), u_max
+
+
 def step_quadrature(tab: ButcherTableau, Q: np.ndarray, h: float) -> float:
     """``h sum_r b_r Q[r]``: one step's share of the quadrature."""
     return float(h * (tab.b_f @ Q))

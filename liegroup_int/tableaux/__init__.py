@@ -16,6 +16,7 @@ This layer depends only on numpy and the standard library.  Public names:
 """
 
 from .base import ButcherTableau
+from .commutator_free import CF3, CF4, CF_REGISTRY, CG3, CG4A, CommutatorFreeTableau
 from .methods import (
     BS32,
     DP54,
@@ -54,6 +55,12 @@ from .stability import (
 
 __all__ = [
     "ButcherTableau",
+    "CommutatorFreeTableau",
+    "CF_REGISTRY",
+    "CF3",
+    "CF4",
+    "CG3",
+    "CG4A",
     "REGISTRY",
     "NAMES",
     "resolve",

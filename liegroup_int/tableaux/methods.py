@@ -20,6 +20,7 @@ Errata in Ferri & Marino, Appendix A (checked in the tests):
 from __future__ import annotations
 
 from .base import ButcherTableau
+from .commutator_free import CF_REGISTRY, CommutatorFreeTableau
 
 
 def _vec(text: str) -> tuple[str, ...]:
@@ -198,16 +199,17 @@ def _names(tableaux) -> dict[str, ButcherTableau]:
     """Every accepted name (registry name and RKMK method name) -> tableau; names unique."""
     names: dict[str, ButcherTableau] = {}
     for tab in tableaux:
-        for key in filter(None, (tab.name, tab.method)):
+        for key in dict.fromkeys(filter(None, (tab.name, tab.method))):
             if key in names:
                 raise ValueError(f"tableau name {key!r} is registered twice")
             names[key] = tab
     return names
 
 
-NAMES: dict[str, ButcherTableau] = _names(REGISTRY.values())
+NAMES: dict[str, ButcherTableau] = _names([*REGISTRY.values(), *CF_REGISTRY.values()])
 """Every name :func:`resolve` accepts: the registry names and the RKMK method names
-(``"rkmk4"``), the one list scenes, the CLI and ``integrate`` share."""
+(``"rkmk4"``), and the commutator-free schemes (``"cf4"``, ``"cg4a"``,
+:mod:`.commutator_free`): the one list scenes, the CLI and ``integrate`` share."""
 
 
 class UnknownTableauError(KeyError, ValueError):
@@ -237,7 +239,7 @@ def resolve(name_or_tableau: str | ButcherTableau) -> ButcherTableau:
     TypeError
         Neither a string nor a tableau.
     """
-    if isinstance(name_or_tableau, ButcherTableau):
+    if isinstance(name_or_tableau, (ButcherTableau, CommutatorFreeTableau)):
         return name_or_tableau
     if not isinstance(name_or_tableau, str):
         raise TypeError(f"expected a tableau name or ButcherTableau, got "

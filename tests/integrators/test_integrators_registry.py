@@ -6,12 +6,12 @@ import pytest
 from liegroup_int import Rn, integrate
 from liegroup_int.integrators import METHODS, resolve_method
 from liegroup_int.scenes import SceneError, load_scene
-from liegroup_int.tableaux import NAMES, REGISTRY, resolve
+from liegroup_int.tableaux import CF_REGISTRY, NAMES, REGISTRY, resolve
 
 
 def test_methods_are_derived_from_the_tableaux():
-    assert METHODS == {tab.method: tab.name for tab in REGISTRY.values()}
-    assert set(NAMES) == set(METHODS) | set(REGISTRY)
+    assert METHODS == {tab.method: tab.name for tab in [*REGISTRY.values(), *CF_REGISTRY.values()]}
+    assert set(NAMES) == set(METHODS) | set(REGISTRY) | set(CF_REGISTRY)
 
 
 @pytest.mark.parametrize("name", sorted(NAMES))

@@ -176,7 +176,7 @@ def test_resolve():
     assert resolve(RK6) is RK6
     assert resolve("rkmk4") is RK4 and resolve("RKMK6") is RK6  # method names too
     for exc in (KeyError, ValueError):
-        with pytest.raises(exc, match="expected one of: bs32, dp54, euler, rk2"):
+        with pytest.raises(exc, match="expected one of: bs32, cf3, cf4, cg3, cg4a, dp54, euler, rk2"):
             resolve("rk5")
     with pytest.raises(TypeError):
         resolve(4)
