@@ -111,6 +111,20 @@ class CommutatorFreeTableau:
         return len(self.c)
 
     @property
+    def A(self) -> tuple:
+        """The collapsed Runge-Kutta matrix ``sum_k alpha_i^k_j`` (Fractions; decimals as
+        the exact value of their float): the scheme's linear stability (on R^n the scheme
+        is this Runge-Kutta method)."""
+        s = len(self.c)
+        return tuple(tuple(Fraction(sum((r[j] for r in self.stage_rows[i]), Fraction(0))) for j in range(s))
+                     for i in range(s))
+
+    @property
+    def b(self) -> tuple:
+        """The collapsed weights ``sum_k beta^k_j`` (see :attr:`A`)."""
+        return tuple(Fraction(sum((r[j] for r in self.final_rows), Fraction(0))) for j in range(len(self.c)))
+
+    @property
     def exact(self) -> bool:
         every = [*self.c, *(x for rows in self.stage_rows for r in rows for x in r),
                  *(x for r in self.final_rows for x in r)]
