@@ -6,8 +6,9 @@ Algebra coordinates: the entries below the diagonal of the skew matrix, row by r
 rotations in space; ``SOn`` is the group of Stiefel frames, isospectral flows and
 rotations in any dimension.)
 
-``exp`` is the matrix exponential (Rodrigues for ``n = 2``, ``scipy.linalg.expm`` with
-scaling and squaring otherwise, batched, then one Newton-Schulz step onto SO(n)); ``dexpinv`` the Bernoulli series of the derived
+``exp`` is the matrix exponential (closed form for ``n = 2``; from the batched
+eigendecomposition of the Hermitian ``i hat(xi)`` up to :data:`EIGH_MAX_N`, scipy's
+Pade ``expm`` above; then one Newton-Schulz step onto SO(n)); ``dexpinv`` the Bernoulli series of the derived
 API, truncated at 40 terms (Munthe-Kaas: a method of order ``q`` needs only ``q - 1``, see
 :meth:`SOn.dexpinv_series`); the Cayley map is offered as a cheaper coordinate map with a
 closed-form inverse derivative (:meth:`SOn.cay`, :meth:`SOn.dcayinv`).
@@ -18,6 +19,12 @@ from __future__ import annotations
 import numpy as np
 
 from .base import LieGroup
+
+
+#: Largest n whose exp goes through the eigendecomposition; above it scipy's Pade expm is
+#: faster (Toda lattice, RKMK4, 1000 steps: n = 5 0.52 s against 2.1 s with expm; n = 50
+#: 14.6 s against 6.3 s).
+EIGH_MAX_N = 16
 
 
 class SOn(LieGroup):
@@ -78,11 +85,18 @@ class SOn(LieGroup):
             t = np.asarray(xi, dtype=float)[..., 0]
             c, s = np.cos(t), np.sin(t)
             return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-        import scipy.linalg
+        # A skew: i A is Hermitian, i A = V diag(w) V^H, so exp(A) = V diag(exp(-i w)) V^H
+        # (batched LAPACK heevd, 5-10x faster than scipy's Pade expm at small n); the
+        # imaginary part is round-off, and one Newton-Schulz step (quadratic) puts the
+        # result on SO(n) to round-off, moving it by ~1e-26
+        if self.n <= EIGH_MAX_N:
+            w, V = np.linalg.eigh(1j * A)
+            g = np.real((V * np.exp(-1j * w)[..., None, :]) @ np.conj(np.swapaxes(V, -1, -2)))
+        else:
+            import scipy.linalg
 
-        # scaling and squaring leaves |g^T g - I| up to ~1e-13 at angles near pi; one
-        # Newton-Schulz step (quadratic) takes it to round-off and moves g by ~1e-26
-        return self.normalize(scipy.linalg.expm(A))
+            g = scipy.linalg.expm(A)
+        return self.normalize(g)
 
     def log(self, g):
         g = np.asarray(g, dtype=float)
@@ -107,6 +121,30 @@ class SOn(LieGroup):
 
     def act(self, g, p):
         return np.einsum("...ij,...j->...i", g, p)
+
+    def dexp_series(self, xi, v, order):
+        """``sum_{k<=order} ad_xi^k v / (k+1)!`` with ``ad`` as matrix commutators,
+        ``O(order n^3)`` (the derived API's ``(dim, dim)`` matrix would cost ``O(n^5)``)."""
+        return self._series(xi, v, order, lambda k, fact, bern: 1.0 / fact[k + 1])
+
+    def dexpinv_series(self, xi, v, order):
+        """``sum_{k<=order} B_k ad_xi^k v / k!`` with ``ad`` as matrix commutators (see
+        :meth:`dexp_series`)."""
+        return self._series(xi, v, order, lambda k, fact, bern: bern[k] / fact[k])
+
+    def _series(self, xi, v, order, coeff):
+        from ._series import bernoulli_numbers, factorials
+
+        fact, bern = factorials(order + 1), bernoulli_numbers(order)
+        A = self.hat(xi)
+        T = self.hat(v)
+        out = coeff(0, fact, bern) * T
+        for k in range(1, order + 1):
+            T = A @ T - T @ A
+            c = coeff(k, fact, bern)
+            if c != 0.0:
+                out = out + c * T
+        return self.vee(out)
 
     # ------------------------------------------------------------------ derived / specific
     def normalize(self, g):
