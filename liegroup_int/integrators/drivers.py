@@ -237,7 +237,7 @@ def integrate_adaptive(
     -------
     (t_end, y_end, stats)
     """
-    if tab.b_hat_f is None:
+    if getattr(tab, "b_hat_f", None) is None:
         raise ValueError(f"method {tab.name!r} has no embedded pair; give a fixed dt instead of rtol/atol")
     if not (rtol > 0 and atol > 0):
         raise ValueError(f"rtol and atol must be positive, got rtol={rtol!r}, atol={atol!r}")

@@ -83,3 +83,8 @@ def test_commutator_free_keeps_the_spectrum():
     M, L0, f = _toda()
     L = integrate(f, L0, (0.0, 20.0), space=M, method="cf4", dt=0.02).y_final
     assert np.max(np.abs(np.linalg.eigvalsh(L) - np.linalg.eigvalsh(L0))) <= 1e-12
+
+
+def test_adaptive_stepping_is_refused_in_one_line():
+    with pytest.raises(ValueError, match="method 'cf4' has no embedded pair; give a fixed dt"):
+        integrate(lambda t, R: np.ones(3), np.eye(3), (0.0, 1.0), space=SO3, method="cf4", rtol=1e-6)
