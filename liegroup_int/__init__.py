@@ -14,13 +14,14 @@ from .integrators import (
     integrate,
     resolve_method,
 )
-from .manifolds import HomogeneousSpace, Isospectral, ProductSpace, RnSpace, Sphere, Stiefel
+from .manifolds import HomogeneousSpace, Isospectral, ProductSpace, RnSpace, Sphere, Stiefel, TangentSphere
 
 __version__ = "0.1.0"
 
 __all__ = [
     "SO3", "SE3", "SOn", "Rn", "Product", "Power", "LieGroup", "integrate", "Problem", "GroupProblem",
-    "ActionProblem", "HomogeneousSpace", "Sphere", "Stiefel", "Isospectral", "RnSpace", "ProductSpace",
+    "ActionProblem", "HomogeneousSpace", "Sphere", "TangentSphere", "Stiefel", "Isospectral", "RnSpace",
+    "ProductSpace",
     "Solution", "StateRecorder", "DiagnosticsRecorder", "METHODS", "resolve_method",
     "IntegrationError", "BlowUpError", "__version__",
 ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..groups import SO3, Product, Rn, SOn
+from ..groups import SE3, SO3, Product, Rn, SOn
 from .base import HomogeneousSpace
 
 
@@ -35,6 +35,44 @@ class Sphere(HomogeneousSpace):
 
     def sample(self, rng, batch_shape=()):
         return self.project(rng.standard_normal(tuple(batch_shape) + (3,)))
+
+
+class TangentSphere(HomogeneousSpace):
+    """The tangent bundle TS^2 = {(q, w): |q| = 1, q . w = 0}, points ``(..., 6)`` =
+    ``(q, w)``, with SE(3) acting as in Celledoni, Cokaj, Leone, Murari & Owren (2022):
+    ``(R, r) . (q, w) = (R q, R w + r x R q)`` (a group action: it composes like SE(3)'s
+    product, and keeps both constraints).
+
+    A link of a spherical pendulum: ``q`` its direction, ``w`` its angular velocity. The
+    generator ``xi = (rho, theta)`` (SE(3)'s ordering) moves ``(q, w)`` at
+    ``(theta x q, theta x w + rho x q)``; ``theta = w`` and ``rho x q = w'`` give any motion.
+    """
+
+    def __init__(self):
+        self.group = SE3
+        self.point_shape = (6,)
+        self.name = "TS2"
+
+    def act(self, g, p):
+        g, p = np.asarray(g, dtype=float), np.asarray(p, dtype=float)
+        R, r = g[..., :3, :3], g[..., :3, 3]
+        q = np.einsum("...ij,...j->...i", R, p[..., :3])
+        w = np.einsum("...ij,...j->...i", R, p[..., 3:]) + np.cross(r, q)
+        return np.concatenate([q, w], axis=-1)
+
+    def constraint(self, p):
+        p = np.asarray(p, dtype=float)
+        q, w = p[..., :3], p[..., 3:]
+        return np.maximum(np.abs(np.linalg.norm(q, axis=-1) - 1.0), np.abs(np.sum(q * w, axis=-1)))
+
+    def project(self, p):
+        p = np.asarray(p, dtype=float)
+        q = p[..., :3] / np.linalg.norm(p[..., :3], axis=-1, keepdims=True)
+        w = p[..., 3:] - np.sum(p[..., 3:] * q, axis=-1, keepdims=True) * q
+        return np.concatenate([q, w], axis=-1)
+
+    def sample(self, rng, batch_shape=()):
+        return self.project(rng.standard_normal(tuple(batch_shape) + (6,)))
 
 
 class Stiefel(HomogeneousSpace):

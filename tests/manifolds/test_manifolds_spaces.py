@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 
-from liegroup_int import Isospectral, ProductSpace, RnSpace, Sphere, Stiefel, integrate
+from liegroup_int import Isospectral, ProductSpace, RnSpace, Sphere, Stiefel, TangentSphere, integrate
 from liegroup_int.manifolds import HomogeneousSpace
 
-SPACES = [Sphere(), Stiefel(4, 2), Stiefel(3, 3), Isospectral(4), RnSpace(3),
-          ProductSpace(Sphere(), Stiefel(3, 1)), ProductSpace.power(Sphere(), 3)]
+SPACES = [Sphere(), TangentSphere(), Stiefel(4, 2), Stiefel(3, 3), Isospectral(4), RnSpace(3),
+          ProductSpace(Sphere(), Stiefel(3, 1)), ProductSpace.power(TangentSphere(), 3)]
 IDS = [s.name.replace(" ", "") for s in SPACES]
 BATCH = (2, 3)
 
