@@ -15,6 +15,7 @@ import numpy as np
 from ..tableaux import ButcherTableau
 from .controller import DEFAULT_CONTROLLER, PIController, h_accepted, h_rejected, rotation_cap, rotation_rate
 from .problem import Problem
+from .methods import is_commutator_free
 from .result import BlowUpError, Stats, StepSizeError
 from .rkmk import cf_step, error_estimate, error_norm, rkmk_step_fsal, step_quadrature
 
@@ -137,7 +138,7 @@ def integrate_fixed(
         raise ValueError(f"dt must be positive, got {dt!r}")
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    cf = getattr(tab, "kind", "") == "commutator_free"  # several exponentials per stage, no dexpinv
+    cf = is_commutator_free(tab)  # several exponentials per stage, no dexpinv
     stepper = _compiled(problem, tab, monitor) if not cf else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)

@@ -26,3 +26,10 @@ def resolve_method(method: "str | ButcherTableau") -> ButcherTableau:
 def is_adaptive(tab: ButcherTableau) -> bool:
     """Whether the tableau carries embedded weights for error control."""
     return tab.b_hat is not None
+
+
+def is_commutator_free(tab) -> bool:
+    """Whether the method composes exponentials without dexpinv
+    (:mod:`liegroup_int.tableaux.commutator_free`): the generic fixed-step loop runs it, the
+    compiled engine and the adaptive driver do not."""
+    return getattr(tab, "kind", "") == "commutator_free"
