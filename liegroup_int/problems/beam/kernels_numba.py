@@ -485,57 +485,73 @@ def _joint_views(sf, si):
     return jf, ji
 
 
+@njit(cache=True, fastmath=_FM, inline="always")
+def _spatial(R, i, c, x0, x1, x2):
+    """Row ``c`` of ``R[i] (x0, x1, x2)``."""
+    return R[i, c, 0] * x0 + R[i, c, 1] * x1 + R[i, c, 2] * x2
+
+
+@njit(cache=True, fastmath=_FM, inline="always")
+def _inertia(R, i, J0, J1, J2, c, d):
+    """Entry ``(c, d)`` of the spatial inertia ``R[i] diag(J) R[i]^T``."""
+    return R[i, c, 0] * J0 * R[i, d, 0] + R[i, c, 1] * J1 * R[i, d, 1] + R[i, c, 2] * J2 * R[i, d, 2]
+
+
 @njit(cache=True, fastmath=_FM)
 def joint_rows(x, v, w, R, sf, si, power):
     """Rigid joints (``BeamProblem._joint_rows``, docs/theory.md section 13): the rows
     ``a, b`` of each joint get one common rate, from their own rows in ``x`` (before any
     solve) and the joint's balance residuals ``r_n = n_b - n_a + F``, ``r_m = m_b - m_a + C``
     (material ``N, M`` read from ``x[:, _X_N]`` and ``x[:, _X_M]``). Returns the power of
-    the joint loads."""
+    the joint loads. Scalars only: nothing is allocated."""
     geo = sf[si[_H_GEO]:si[_H_GEO] + _GEO * si[_H_N]].reshape((si[_H_N], _GEO))
     jf, ji = _joint_views(sf, si)
     pwr = 0.0
-    ra, rb = np.empty(3), np.empty(3)
-    S, inv, rhs = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
     for k in range(ji.shape[0]):
         a, b = ji[k, 0], ji[k, 1]
         fac = jf[k, 0] + jf[k, 1]
-        for d in range(3):
-            na = R[a, d, 0] * x[a, _X_N] + R[a, d, 1] * x[a, _X_N + 1] + R[a, d, 2] * x[a, _X_N + 2]
-            nb = R[b, d, 0] * x[b, _X_N] + R[b, d, 1] * x[b, _X_N + 1] + R[b, d, 2] * x[b, _X_N + 2]
-            ma = R[a, d, 0] * x[a, _X_M] + R[a, d, 1] * x[a, _X_M + 1] + R[a, d, 2] * x[a, _X_M + 2]
-            mb = R[b, d, 0] * x[b, _X_M] + R[b, d, 1] * x[b, _X_M + 1] + R[b, d, 2] * x[b, _X_M + 2]
-            ra[d] = nb - na + jf[k, 2 + d]
-            rb[d] = mb - ma + jf[k, 5 + d]
+        Na0, Na1, Na2 = x[a, _X_N], x[a, _X_N + 1], x[a, _X_N + 2]
+        Nb0, Nb1, Nb2 = x[b, _X_N], x[b, _X_N + 1], x[b, _X_N + 2]
+        Ma0, Ma1, Ma2 = x[a, _X_M], x[a, _X_M + 1], x[a, _X_M + 2]
+        Mb0, Mb1, Mb2 = x[b, _X_M], x[b, _X_M + 1], x[b, _X_M + 2]
+        rn0 = _spatial(R, b, 0, Nb0, Nb1, Nb2) - _spatial(R, a, 0, Na0, Na1, Na2) + jf[k, 2]
+        rn1 = _spatial(R, b, 1, Nb0, Nb1, Nb2) - _spatial(R, a, 1, Na0, Na1, Na2) + jf[k, 3]
+        rn2 = _spatial(R, b, 2, Nb0, Nb1, Nb2) - _spatial(R, a, 2, Na0, Na1, Na2) + jf[k, 4]
+        rm0 = _spatial(R, b, 0, Mb0, Mb1, Mb2) - _spatial(R, a, 0, Ma0, Ma1, Ma2) + jf[k, 5]
+        rm1 = _spatial(R, b, 1, Mb0, Mb1, Mb2) - _spatial(R, a, 1, Ma0, Ma1, Ma2) + jf[k, 6]
+        rm2 = _spatial(R, b, 2, Mb0, Mb1, Mb2) - _spatial(R, a, 2, Ma0, Ma1, Ma2) + jf[k, 7]
         if power:
             pwr += (jf[k, 2] * v[a, 0] + jf[k, 3] * v[a, 1] + jf[k, 4] * v[a, 2]
                     + jf[k, 5] * w[a, 0] + jf[k, 6] * w[a, 1] + jf[k, 7] * w[a, 2])
-        # spatial inertias R diag(J) R^T of both sections, and the torque sum
+        # spatial inertias R diag(J) R^T of both sections (symmetric), and the torque sum
         Ja0, Ja1, Ja2 = geo[a, _G_JM], geo[a, _G_JM + 1], geo[a, _G_JM + 2]
         Jb0, Jb1, Jb2 = geo[b, _G_JM], geo[b, _G_JM + 1], geo[b, _G_JM + 2]
+        a00, a01, a02 = _inertia(R, a, Ja0, Ja1, Ja2, 0, 0), _inertia(R, a, Ja0, Ja1, Ja2, 0, 1), _inertia(R, a, Ja0, Ja1, Ja2, 0, 2)
+        a11, a12, a22 = _inertia(R, a, Ja0, Ja1, Ja2, 1, 1), _inertia(R, a, Ja0, Ja1, Ja2, 1, 2), _inertia(R, a, Ja0, Ja1, Ja2, 2, 2)
+        b00, b01, b02 = _inertia(R, b, Jb0, Jb1, Jb2, 0, 0), _inertia(R, b, Jb0, Jb1, Jb2, 0, 1), _inertia(R, b, Jb0, Jb1, Jb2, 0, 2)
+        b11, b12, b22 = _inertia(R, b, Jb0, Jb1, Jb2, 1, 1), _inertia(R, b, Jb0, Jb1, Jb2, 1, 2), _inertia(R, b, Jb0, Jb1, Jb2, 2, 2)
+        xa0, xa1, xa2 = x[a, 9], x[a, 10], x[a, 11]
+        xb0, xb1, xb2 = x[b, 9], x[b, 10], x[b, 11]
+        t0 = a00 * xa0 + a01 * xa1 + a02 * xa2 + b00 * xb0 + b01 * xb1 + b02 * xb2 + fac * rm0
+        t1 = a01 * xa0 + a11 * xa1 + a12 * xa2 + b01 * xb0 + b11 * xb1 + b12 * xb2 + fac * rm1
+        t2 = a02 * xa0 + a12 * xa1 + a22 * xa2 + b02 * xb0 + b12 * xb1 + b22 * xb2 + fac * rm2
+        s00, s01, s02, s11, s12, s22 = a00 + b00, a01 + b01, a02 + b02, a11 + b11, a12 + b12, a22 + b22
+        # symmetric 3x3 solve by cofactors
+        c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+        c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+        det = s00 * c00 + s01 * c01 + s02 * c02
+        al0 = (c00 * t0 + c01 * t1 + c02 * t2) / det
+        al1 = (c01 * t0 + c11 * t1 + c12 * t2) / det
+        al2 = (c02 * t0 + c12 * t1 + c22 * t2) / det
         mu_a, mu_b = geo[a, _G_MU], geo[b, _G_MU]
-        for d in range(3):
-            rhs[d] = fac * rb[d]
-            for e in range(3):
-                sa = R[a, d, 0] * Ja0 * R[a, e, 0] + R[a, d, 1] * Ja1 * R[a, e, 1] + R[a, d, 2] * Ja2 * R[a, e, 2]
-                sb = R[b, d, 0] * Jb0 * R[b, e, 0] + R[b, d, 1] * Jb1 * R[b, e, 1] + R[b, d, 2] * Jb2 * R[b, e, 2]
-                S[d, e] = sa + sb
-                rhs[d] += sa * x[a, 9 + e] + sb * x[b, 9 + e]
-        # 3x3 symmetric positive definite solve: inverse = cofactors^T / det
-        for d in range(3):
-            d1, d2 = (d + 1) % 3, (d + 2) % 3
-            for e in range(3):
-                e1, e2 = (e + 1) % 3, (e + 2) % 3
-                inv[e, d] = S[d1, e1] * S[d2, e2] - S[d1, e2] * S[d2, e1]
-        det = S[0, 0] * inv[0, 0] + S[0, 1] * inv[1, 0] + S[0, 2] * inv[2, 0]
         for d in range(3):
             x[a, d] = x[b, d] = 0.5 * (x[a, d] + x[b, d])
             x[a, 3 + d] = x[b, 3 + d] = 0.5 * (x[a, 3 + d] + x[b, 3 + d])
-            x[a, 6 + d] = x[b, 6 + d] = (mu_a * x[a, 6 + d] + mu_b * x[b, 6 + d] + fac * ra[d]) / (mu_a + mu_b)
+        rn = (rn0, rn1, rn2)
         for d in range(3):
-            x[a, 9 + d] = (inv[d, 0] * rhs[0] + inv[d, 1] * rhs[1] + inv[d, 2] * rhs[2]) / det
-        for d in range(3):
-            x[b, 9 + d] = x[a, 9 + d]
+            x[a, 6 + d] = x[b, 6 + d] = (mu_a * x[a, 6 + d] + mu_b * x[b, 6 + d] + fac * rn[d]) / (mu_a + mu_b)
+        x[a, 9], x[a, 10], x[a, 11] = al0, al1, al2
+        x[b, 9], x[b, 10], x[b, 11] = al0, al1, al2
     return pwr
 
 
