@@ -27,6 +27,7 @@ def integrate(
     observer: Callable | None = None,
     monitor: Callable | None = None,
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
+    coordinates: str = "exp",
 ) -> Solution:
     """Integrate ``dy/dt = f(t, y) y`` on a Lie group with an explicit RKMK method.
 
@@ -59,6 +60,9 @@ def integrate(
         ``monitor(t, y, stats)`` after every accepted step.
     max_increment_angle : float
         Largest rotation angle one step may carry [rad].
+    coordinates : {"exp", "cayley"}
+        On a homogeneous space whose group has a Cayley map (``SOn``): step with it
+        instead of the exponential (:class:`ActionProblem`).
 
     Returns
     -------
@@ -73,13 +77,16 @@ def integrate(
     >>> np.allclose(sol.y_final, SO3.exp(np.pi * w))
     True
     """
+    if coordinates != "exp" and (isinstance(f, Problem) or space is None or isinstance(space, LieGroup)):
+        raise ValueError("coordinates='cayley' applies to homogeneous spaces (space=M); use an ActionProblem")
     if isinstance(f, Problem):
         problem = f
     elif space is not None and not isinstance(space, LieGroup):
         # a homogeneous space (liegroup_int.manifolds); a group without a closed-form
         # dexpinv gets its Bernoulli series truncated to the method's order
         series = type(space.group).dexpinv is LieGroup.dexpinv
-        problem = ActionProblem(space, f, dexpinv_order=resolve_method(method).order - 1 if series else None)
+        problem = ActionProblem(space, f, dexpinv_order=resolve_method(method).order - 1 if series else None,
+                                coordinates=coordinates)
         y0 = np.asarray(y0, dtype=float)
     else:
         if space is None:

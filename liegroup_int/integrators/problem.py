@@ -290,23 +290,37 @@ class ActionProblem(Problem):
         order (Munthe-Kaas: a method of order ``q`` needs ``k <= q - 1``, since
         ``u = O(h)``). ``None``: the group's own ``dexpinv`` (closed form, or its series
         to convergence).
+    coordinates : {"exp", "cayley"}
+        The map from the algebra to the group: the exponential, or the Cayley map
+        (groups with ``cay`` and ``dcayinv``, e.g. ``SOn``: no transcendental functions,
+        and a closed-form inverse derivative instead of a series; same order).
     """
 
-    def __init__(self, space, f: Callable[[float, np.ndarray], np.ndarray], dexpinv_order: int | None = None):
+    def __init__(self, space, f: Callable[[float, np.ndarray], np.ndarray], dexpinv_order: int | None = None,
+                 coordinates: str = "exp"):
         from ..manifolds import HomogeneousSpace
 
         if not isinstance(space, HomogeneousSpace):
             raise TypeError(f"ActionProblem: space must be a HomogeneousSpace, got {space!r}")
         if dexpinv_order is not None and int(dexpinv_order) < 0:
             raise ValueError(f"dexpinv_order: expected an integer >= 0, got {dexpinv_order!r}")
+        if coordinates not in ("exp", "cayley"):
+            raise ValueError(f"coordinates: expected 'exp' or 'cayley', got {coordinates!r}")
+        if coordinates == "cayley" and not hasattr(space.group, "cay"):
+            raise ValueError(f"coordinates='cayley': the group {space.group.name} has no Cayley map (SOn has)")
         self.space, self.f = space, f
         self.dexpinv_order = None if dexpinv_order is None else int(dexpinv_order)
+        self.coordinates = coordinates
         self._ndim = len(space.point_shape)
 
     def action(self, u, y):
+        if self.coordinates == "cayley":
+            return self.space.act(self.space.group.cay(u), y)
         return self.space.retract(u, y)
 
     def dexpinv(self, u, w):
+        if self.coordinates == "cayley":
+            return self.space.group.dcayinv(u, w)
         if self.dexpinv_order is not None:
             return self.space.group.dexpinv_series(u, w, self.dexpinv_order)
         return self.space.dexpinv(u, w)
