@@ -20,7 +20,9 @@ import types
 import numpy as np
 from numba import njit
 
-from ..groups.kernels_numba import dexpinv_flat, magnitude_flat, retract_flat, rotation_angle_flat
+import math
+
+from ..groups.kernels_numba import _coef_AB, _exp_rot, dexpinv_flat, magnitude_flat, retract_flat, rotation_angle_flat
 from .engine import CompiledProblem, EngineKernels
 
 
@@ -82,6 +84,28 @@ def group_data(space, *extra) -> tuple:
     return (cg.ft, cg.ser, cg.thr, int(np.prod(space.point_shape)), int(space.dim)) + tuple(extra)
 
 
+@njit(cache=True, inline="always")
+def sphere_action(data, u, y, out):
+    """``out = exp(u) y`` for points of the unit sphere (``Sphere``, SO(3) acting)."""
+    ser, thr = data[1], data[2]
+    for j in range(y.shape[0] // 3):
+        a = 3 * j
+        x0, x1, x2 = u[a], u[a + 1], u[a + 2]
+        cA, cB = _coef_AB(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
+        e = _exp_rot(cA, cB, x0, x1, x2)
+        y0, y1, y2 = y[a], y[a + 1], y[a + 2]
+        out[a] = e[0] * y0 + e[1] * y1 + e[2] * y2
+        out[a + 1] = e[3] * y0 + e[4] * y1 + e[5] * y2
+        out[a + 2] = e[6] * y0 + e[7] * y1 + e[8] * y2
+
+
+@njit(cache=True, inline="always")
+def unit_scale(data, y, out):
+    """Error scale 1 on every increment component (``Problem.increment_scale``'s default)."""
+    for k in range(out.shape[0]):
+        out[k] = 1.0
+
+
 # ---------------------------------------------------------------- a user's njit f
 USER_F = None  # bound to the user's function in each compiled copy (see _user_kernels)
 
@@ -106,20 +130,37 @@ def _user_rate(data, t, y, u, out):
 _USER_KERNELS: dict = {}
 
 
-def _user_kernels(f) -> EngineKernels:
-    """Engine kernels calling the compiled ``f`` (built once per function; not cached on
-    disk: numba cannot key a cache on a user's function)."""
-    kern = _USER_KERNELS.get(f)
+def _user_kernels(f, action=group_action, scale=group_scale, name: str = "user") -> EngineKernels:
+    """Engine kernels calling the compiled ``f`` with the given action and error scale
+    (built once per function and action; not cached on disk: numba cannot key a cache on a
+    user's function)."""
+    kern = _USER_KERNELS.get((f, name))
     if kern is None:
         ns = dict(globals(), USER_F=f)
         made = {}
         for fn in (_user_field, _user_rate):  # _user_rate calls the compiled _user_field
             copy = types.FunctionType(fn.__code__, ns, fn.__name__)
             made[fn.__name__] = ns[fn.__name__] = njit(cache=False)(copy)
-        kern = EngineKernels("user", made["_user_rate"], group_action, group_angle, group_scale,
+        kern = EngineKernels(name, made["_user_rate"], action, group_angle, scale,
                              field=made["_user_field"], dexpinv=group_dexpinv, cache=False)
-        _USER_KERNELS[f] = kern
+        _USER_KERNELS[(f, name)] = kern
     return kern
+
+
+def sphere_problem_kernels(problem) -> CompiledProblem:
+    """The engine's view of an ODE on ``Sphere()`` (an ``ActionProblem``) whose ``f`` is
+    numba-compiled: one point ``(3,)``, SO(3)'s compiled exp and dexpinv."""
+    from ..groups import SO3
+
+    def pack(y):
+        y = np.asarray(y, dtype=float)
+        if y.shape != (3,):
+            raise ValueError(f"a numba-compiled f runs on one point of shape (3,), got {y.shape}; "
+                             "use a plain Python f for batches")
+        return np.ascontiguousarray(y)
+
+    return CompiledProblem(_user_kernels(problem.f, sphere_action, unit_scale, "user_sphere"),
+                           group_data(SO3, (3,)), lambda n: 3, pack, lambda flat: flat.reshape(3))
 
 
 def group_problem_kernels(problem) -> CompiledProblem:
