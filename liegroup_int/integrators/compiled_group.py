@@ -22,7 +22,16 @@ from numba import njit
 
 import math
 
-from ..groups.kernels_numba import _coef_AB, _exp_rot, dexpinv_flat, magnitude_flat, retract_flat, rotation_angle_flat
+from ..groups.kernels_numba import (
+    _coef_AB,
+    _cross,
+    _exp_rot,
+    coefficients,
+    dexpinv_flat,
+    magnitude_flat,
+    retract_flat,
+    rotation_angle_flat,
+)
 from .engine import CompiledProblem, EngineKernels
 
 
@@ -100,6 +109,30 @@ def sphere_action(data, u, y, out):
 
 
 @njit(cache=True, inline="always")
+def tangent_sphere_action(data, u, y, out):
+    """``(q, w) <- (R q, R w + r x R q)`` with ``(R, r) = exp(u)`` of SE(3), ``u = (rho,
+    theta)``, ``r = J_l(theta) rho`` (``TangentSphere`` and its powers: 6 numbers per link)."""
+    ser, thr = data[1], data[2]
+    for j in range(y.shape[0] // 6):
+        a = 6 * j
+        r0, r1, r2 = u[a], u[a + 1], u[a + 2]
+        x0, x1, x2 = u[a + 3], u[a + 4], u[a + 5]
+        cA, cB, cC, cD, cE, cF = coefficients(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
+        e = _exp_rot(cA, cB, x0, x1, x2)
+        c0, c1, c2 = _cross(x0, x1, x2, r0, r1, r2)
+        d0, d1, d2 = _cross(x0, x1, x2, c0, c1, c2)
+        t0, t1, t2 = r0 + cB * c0 + cC * d0, r1 + cB * c1 + cC * d1, r2 + cB * c2 + cC * d2
+        q0, q1, q2 = y[a], y[a + 1], y[a + 2]
+        w0, w1, w2 = y[a + 3], y[a + 4], y[a + 5]
+        Q0, Q1, Q2 = e[0] * q0 + e[1] * q1 + e[2] * q2, e[3] * q0 + e[4] * q1 + e[5] * q2, e[6] * q0 + e[7] * q1 + e[8] * q2
+        k0, k1, k2 = _cross(t0, t1, t2, Q0, Q1, Q2)
+        out[a], out[a + 1], out[a + 2] = Q0, Q1, Q2
+        out[a + 3] = e[0] * w0 + e[1] * w1 + e[2] * w2 + k0
+        out[a + 4] = e[3] * w0 + e[4] * w1 + e[5] * w2 + k1
+        out[a + 5] = e[6] * w0 + e[7] * w1 + e[8] * w2 + k2
+
+
+@njit(cache=True, inline="always")
 def unit_scale(data, y, out):
     """Error scale 1 on every increment component (``Problem.increment_scale``'s default)."""
     for k in range(out.shape[0]):
@@ -147,20 +180,34 @@ def _user_kernels(f, action=group_action, scale=group_scale, name: str = "user")
     return kern
 
 
-def sphere_problem_kernels(problem) -> CompiledProblem:
-    """The engine's view of an ODE on ``Sphere()`` (an ``ActionProblem``) whose ``f`` is
-    numba-compiled: one point ``(3,)``, SO(3)'s compiled exp and dexpinv."""
-    from ..groups import SO3
+def space_problem_kernels(problem) -> CompiledProblem | None:
+    """The engine's view of an ODE on a homogeneous space (an ``ActionProblem``) whose ``f``
+    is numba-compiled, on one point: ``Sphere()`` (SO(3) acting) and ``TangentSphere()``
+    and its powers (SE(3) per link), with the groups' compiled exp and dexpinv. ``None``
+    for other spaces (the generic loop)."""
+    from ..groups import SE3, SO3, Product
+    from ..manifolds import ProductSpace, Sphere, TangentSphere
+
+    space = problem.space
+    if type(space) is Sphere:
+        group, action, name = SO3, sphere_action, "user_sphere"
+    elif type(space) is TangentSphere or (type(space) is ProductSpace
+                                          and all(type(f) is TangentSphere for f in space.factors)):
+        links = 1 if type(space) is TangentSphere else len(space.factors)
+        group, action, name = (SE3 if links == 1 else Product(*[SE3] * links)), tangent_sphere_action, "user_ts2"
+    else:
+        return None
+    size, dim = int(np.prod(space.point_shape)), int(group.dim)
 
     def pack(y):
         y = np.asarray(y, dtype=float)
-        if y.shape != (3,):
-            raise ValueError(f"a numba-compiled f runs on one point of shape (3,), got {y.shape}; "
+        if y.shape != space.point_shape:
+            raise ValueError(f"a numba-compiled f runs on one point of shape {space.point_shape}, got {y.shape}; "
                              "use a plain Python f for batches")
-        return np.ascontiguousarray(y)
+        return np.ascontiguousarray(y).reshape(size)
 
-    return CompiledProblem(_user_kernels(problem.f, sphere_action, unit_scale, "user_sphere"),
-                           group_data(SO3, (3,)), lambda n: 3, pack, lambda flat: flat.reshape(3))
+    return CompiledProblem(_user_kernels(problem.f, action, unit_scale, name), group_data(group, space.point_shape),
+                           lambda n: dim, pack, lambda flat: flat.reshape(space.point_shape))
 
 
 def group_problem_kernels(problem) -> CompiledProblem:

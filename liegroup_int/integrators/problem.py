@@ -329,14 +329,13 @@ class ActionProblem(Problem):
         return self.dexpinv(u, np.asarray(self.f(t, y), dtype=float))
 
     def compiled_kernels(self):
-        """The compiled engine's kernels for a ``numba.njit`` ``f`` on ``Sphere()`` (single
-        points, exp coordinates; :func:`~.compiled_group.sphere_problem_kernels`), else
-        ``None`` (the generic loop)."""
-        from ..manifolds import Sphere
-        from .compiled_group import is_compiled_function, sphere_problem_kernels
+        """The compiled engine's kernels for a ``numba.njit`` ``f`` on ``Sphere()``,
+        ``TangentSphere()`` or a power of it (single points, exp coordinates;
+        :func:`~.compiled_group.space_problem_kernels`), else ``None`` (the generic loop)."""
+        from .compiled_group import is_compiled_function, space_problem_kernels
 
-        if type(self.space) is Sphere and self.coordinates == "exp" and is_compiled_function(self.f):
-            return sphere_problem_kernels(self)
+        if self.coordinates == "exp" and self.dexpinv_order is None and is_compiled_function(self.f):
+            return space_problem_kernels(self)
         return None
 
     def vector_field(self, t, y):
