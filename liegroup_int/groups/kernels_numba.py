@@ -195,6 +195,19 @@ def normalize_rotations(R):
             R[i, a, 2] = h0 * a02 + h1 * a12 + h2 * a22
 
 
+@njit(cache=True, inline="always")
+def se3_exp_parts(u, a, ser, thr):
+    """``exp(u)`` of SE(3) for ``u[a:a+6] = (rho, theta)``: the rotation's rows ``E`` (9-tuple)
+    and the translation ``J_l(theta) rho = rho + B theta x rho + C theta x (theta x rho)``."""
+    r0, r1, r2 = u[a], u[a + 1], u[a + 2]
+    x0, x1, x2 = u[a + 3], u[a + 4], u[a + 5]
+    cA, cB, cC, cD, cE, cF = coefficients(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
+    e = _exp_rot(cA, cB, x0, x1, x2)
+    c0, c1, c2 = _cross(x0, x1, x2, r0, r1, r2)
+    d0, d1, d2 = _cross(x0, x1, x2, c0, c1, c2)
+    return e, r0 + cB * c0 + cC * d0, r1 + cB * c1 + cC * d1, r2 + cB * c2 + cC * d2
+
+
 @njit(cache=True)
 def retract_flat(ft, ser, thr, u, y, out, po, ao):
     """``out = exp(u) y`` factor by factor for the point at offset ``po`` of ``y``/``out``
@@ -209,13 +222,7 @@ def retract_flat(ft, ser, thr, u, y, out, po, ao):
             cA, cB = _coef_AB(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
             _rotate(_exp_rot(cA, cB, x0, x1, x2), y, p, out, p, 3)
         else:  # SE3: exp(u) = [[E, J rho], [0, 1]], u = (rho, theta)
-            r0, r1, r2 = u[a], u[a + 1], u[a + 2]
-            x0, x1, x2 = u[a + 3], u[a + 4], u[a + 5]
-            cA, cB, cC, cD, cE, cF = coefficients(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
-            e = _exp_rot(cA, cB, x0, x1, x2)
-            c0, c1, c2 = _cross(x0, x1, x2, r0, r1, r2)
-            d0, d1, d2 = _cross(x0, x1, x2, c0, c1, c2)
-            j0, j1, j2 = r0 + cB * c0 + cC * d0, r1 + cB * c1 + cC * d1, r2 + cB * c2 + cC * d2
+            e, j0, j1, j2 = se3_exp_parts(u, a, ser, thr)
             _rotate(e, y, p, out, p, 4)
             g0, g1, g2 = y[p + 3], y[p + 7], y[p + 11]
             out[p + 3] = e[0] * g0 + e[1] * g1 + e[2] * g2 + j0

@@ -26,11 +26,11 @@ from ..groups.kernels_numba import (
     _coef_AB,
     _cross,
     _exp_rot,
-    coefficients,
     dexpinv_flat,
     magnitude_flat,
     retract_flat,
     rotation_angle_flat,
+    se3_exp_parts,
 )
 from .engine import CompiledProblem, EngineKernels
 
@@ -115,13 +115,7 @@ def tangent_sphere_action(data, u, y, out):
     ser, thr = data[1], data[2]
     for j in range(y.shape[0] // 6):
         a = 6 * j
-        r0, r1, r2 = u[a], u[a + 1], u[a + 2]
-        x0, x1, x2 = u[a + 3], u[a + 4], u[a + 5]
-        cA, cB, cC, cD, cE, cF = coefficients(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
-        e = _exp_rot(cA, cB, x0, x1, x2)
-        c0, c1, c2 = _cross(x0, x1, x2, r0, r1, r2)
-        d0, d1, d2 = _cross(x0, x1, x2, c0, c1, c2)
-        t0, t1, t2 = r0 + cB * c0 + cC * d0, r1 + cB * c1 + cC * d1, r2 + cB * c2 + cC * d2
+        e, t0, t1, t2 = se3_exp_parts(u, a, ser, thr)
         q0, q1, q2 = y[a], y[a + 1], y[a + 2]
         w0, w1, w2 = y[a + 3], y[a + 4], y[a + 5]
         Q0, Q1, Q2 = e[0] * q0 + e[1] * q1 + e[2] * q2, e[3] * q0 + e[4] * q1 + e[5] * q2, e[6] * q0 + e[7] * q1 + e[8] * q2
