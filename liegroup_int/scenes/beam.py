@@ -236,9 +236,11 @@ POINT_LOAD_KEYS = {
 
 
 def _pieces(scene: Scene):
-    """The patches of the scene before splitting: ``[(where, get, base_curve_or_None, n)]``."""
+    """The beams of the scene before splitting: ``[(get, pre, n_ctrl, section)]`` with
+    ``get(key)`` its geometry keys, ``pre`` its name in errors and ``section`` its own
+    :class:`SectionConstants` (None: the scene's)."""
     if not scene["beams"]:
-        return [("geometry", lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"], None)]
+        return [(lambda k: scene[f"geometry.{k}"], "geometry.", scene["space.n_ctrl"], None)]
     given = [k for k in scene.raw if k.startswith("geometry.")]
     if given:
         raise SceneError(f"{scene.source}: key '{given[0]}': a frame takes its geometry from [[beams]]; "
@@ -260,7 +262,7 @@ def _pieces(scene: Scene):
             section = constants(scene, lambda k, g=given: g[k] if k in g else scene[k], label)
         else:
             section = None
-        out.append((label, v.get, label, v["n_ctrl"] or scene["space.n_ctrl"], section))
+        out.append((v.get, label, v["n_ctrl"] or scene["space.n_ctrl"], section))
     return out
 
 
@@ -304,7 +306,7 @@ def frame_space(scene: Scene):
     p = scene["space.degree"]
     # pieces: (get, pre, refined curve, n_ctrl, exact coarse curve or None = not yet built)
     beams = _pieces(scene)
-    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for _, get, pre, n, _ in beams]
+    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for get, pre, n, _ in beams]
     sections = [sec for *_, sec in beams]
     loads = []
     for i, entry in enumerate(scene["point_loads"]):

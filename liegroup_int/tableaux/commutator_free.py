@@ -74,7 +74,12 @@ class CommutatorFreeTableau:
     final_rows: tuple
     order: int
     description: str = ""
-    #: the collapsed Runge-Kutta coefficients (R^n), floats, ``(s, s)`` and ``(s,)``
+    #: the collapsed Runge-Kutta coefficients ``sum_k alpha_i^k_j`` and ``sum_k beta^k_j``
+    #: (Fractions; decimals as the exact value of their float): the scheme's linear
+    #: stability, since on R^n it is this Runge-Kutta method
+    A: tuple = field(init=False, repr=False, compare=False)
+    b: tuple = field(init=False, repr=False, compare=False)
+    #: the same as floats, ``(s, s)`` and ``(s,)``
     A_f: np.ndarray = field(init=False, repr=False, compare=False)
     b_f: np.ndarray = field(init=False, repr=False, compare=False)
     c_f: np.ndarray = field(init=False, repr=False, compare=False)
@@ -95,34 +100,22 @@ class CommutatorFreeTableau:
         object.__setattr__(self, "c", c)
         object.__setattr__(self, "stage_rows", stages)
         object.__setattr__(self, "final_rows", final)
-        self._check()
-        s = len(c)
-        A = np.array([[float(sum((r[j] for r in stages[i]), Fraction(0))) for j in range(s)] for i in range(s)])
-        for name, arr in (("A_f", A), ("b_f", np.array([float(sum(r[j] for r in final)) for j in range(s)])),
-                          ("c_f", np.array([float(x) for x in c]))):
+        A_raw, b_raw = self._check()
+        A = tuple(tuple(Fraction(x) for x in row) for row in A_raw)
+        b = tuple(Fraction(x) for x in b_raw)
+        object.__setattr__(self, "A", A)
+        object.__setattr__(self, "b", b)
+        for name, arr in (("A_f", np.array([[float(x) for x in row] for row in A])),
+                          ("b_f", np.array([float(x) for x in b])), ("c_f", np.array([float(x) for x in c]))):
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
-        rows_f = tuple(np.array([[float(x) for x in r] for r in rows]).reshape(len(rows), s) for rows in stages)
+        rows_f = tuple(np.array([[float(x) for x in r] for r in rows]).reshape(len(rows), len(c)) for rows in stages)
         object.__setattr__(self, "stage_rows_f", rows_f)
         object.__setattr__(self, "final_rows_f", np.array([[float(x) for x in r] for r in final]))
 
     @property
     def stages(self) -> int:
         return len(self.c)
-
-    @property
-    def A(self) -> tuple:
-        """The collapsed Runge-Kutta matrix ``sum_k alpha_i^k_j`` (Fractions; decimals as
-        the exact value of their float): the scheme's linear stability (on R^n the scheme
-        is this Runge-Kutta method)."""
-        s = len(self.c)
-        return tuple(tuple(Fraction(sum((r[j] for r in self.stage_rows[i]), Fraction(0))) for j in range(s))
-                     for i in range(s))
-
-    @property
-    def b(self) -> tuple:
-        """The collapsed weights ``sum_k beta^k_j`` (see :attr:`A`)."""
-        return tuple(Fraction(sum((r[j] for r in self.final_rows), Fraction(0))) for j in range(len(self.c)))
 
     @property
     def exact(self) -> bool:
@@ -142,6 +135,8 @@ class CommutatorFreeTableau:
         return residual == 0 if isinstance(residual, Fraction) else abs(residual) <= DECIMAL_TOL
 
     def _check(self):
+        """Run the checks (see the module docstring); return the collapsed ``A, b`` as given
+        (Fractions, or floats for decimal coefficients)."""
         c, stages, final = self.c, self.stage_rows, self.final_rows
         s = len(c)
         if s == 0 or len(stages) != s:
@@ -173,6 +168,7 @@ class CommutatorFreeTableau:
             if not self._close(comm - Fraction(-1, 6)):
                 self._fail(f"claimed order {self.order} but the final exponentials miss the h^3 Magnus term "
                            f"(sum = {comm}, expected -1/6)")
+        return A, b
 
 
 def _cg(name, method, c, A_rows, b, order, description):
