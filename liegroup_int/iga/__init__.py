@@ -20,6 +20,7 @@ from .collocation import (
     tangent_derivatives,
     vee,
 )
+from .galerkin import BandedSPD, GalerkinSpace, gauss_points
 from .geometry import (
     ARCH_RADIUS,
     HELIX_RADIUS,
@@ -44,7 +45,9 @@ __all__ = [
     "ARCH_RADIUS",
     "HELIX_RADIUS",
     "DEFAULT_MIN_ANGLE",
+    "BandedSPD",
     "CollocationSpace",
+    "GalerkinSpace",
     "NurbsCurve",
     "arc_exact",
     "arc_length",
@@ -56,6 +59,7 @@ __all__ = [
     "default_reference_vector",
     "elevate_degree",
     "find_spans",
+    "gauss_points",
     "greville",
     "helix_quarter",
     "helix_quarter_exact",

@@ -301,8 +301,8 @@ class BeamParaViewWriter(FrameSeriesWriter):
     out_dir : str or Path
         Run directory; ``paraview/`` is created in it.
     problem : BeamProblem
-        Supplies the basis (``space.N0``, ``space.point_matrix``), the collocation
-        parameters ``space.u_c`` and the reference arc length ``space.s_c``.
+        Supplies the points that carry its rotations (``frame_points``: parameters,
+        basis values, reference arc lengths) and ``space.point_matrix``.
     every_output : bool
         As :class:`FrameSeriesWriter`.
     n_points : int, optional
@@ -325,9 +325,10 @@ class BeamParaViewWriter(FrameSeriesWriter):
         super().__init__(out_dir, self._arrays, every_output, encoding, "beam")
         self.problem = problem
         space = problem.space
-        self._u_c = np.asarray(space.u_c, dtype=float)
+        u_pts, basis, s_pts = problem.frame_points
+        self._u_c = np.asarray(u_pts, dtype=float)
         if n_points is None:
-            self._u, self._B, self._s = None, np.asarray(space.N0), np.asarray(space.s_c, dtype=float)
+            self._u, self._B, self._s = None, np.asarray(basis), np.asarray(s_pts, dtype=float)
         else:
             u = np.linspace(0.0, 1.0, int(n_points))
             self._u, self._B, self._s = u, space.point_matrix(u), np.asarray(space.arc_length(u), dtype=float)

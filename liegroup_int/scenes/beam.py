@@ -20,6 +20,7 @@ from ..problems.beam import (
     SupportMotion,
 )
 from ..problems.beam.damping import size_kelvin_voigt
+from ..problems.beam.galerkin import GalerkinBeamProblem
 from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
@@ -88,8 +89,9 @@ KEYS = {
             choices=("numba", "numpy")),
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
         Key("space.formulation", "str", "primal",
-            "balance laws: the paper's primal collocation, or the locking-free mixed one (resultant splines)",
-            choices=("primal", "mixed")),
+            "balance laws: the paper's primal collocation, the locking-free mixed one (resultant splines), or the "
+            "weak form (galerkin: energy-conserving, one member)",
+            choices=("primal", "mixed", "galerkin")),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
@@ -480,8 +482,16 @@ def _undamped(scene: Scene) -> BeamProblem:
     kv = scene["material.kelvin_voigt"]
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key
     try:
-        pb = BeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
-                         kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
+        if scene["space.formulation"] == "galerkin":
+            if hasattr(space, "patches"):
+                raise SceneError(f"{scene.source}: key 'space.formulation' = 'galerkin' takes one member "
+                                 f"({len(space.patches)} here, from [[beams]] or [[point_loads]]); use 'mixed' "
+                                 "or 'primal' for frames")
+            pb = GalerkinBeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
+                                     kelvin_voigt=0.0 if kv == "auto" else kv)
+        else:
+            pb = BeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
+                             kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return pb
@@ -498,7 +508,7 @@ def _sized(scene: Scene, pb: BeamProblem) -> BeamProblem:
         rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
-                         f"({pb.formulation} collocation, p={scene['space.degree']}, "
+                         f"({describe_formulation(pb.formulation)}, p={scene['space.degree']}, "
                          f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
                          + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
                             else "") + ", or give an explicit retardation time") from None
@@ -630,7 +640,8 @@ def build(scene: Scene) -> Simulation:
         **info,
         "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
                            "n_ctrl": scene["space.n_ctrl"],
-                           "length": pb.space.length, "C_star": 4.0,
+                           "length": pb.space.length,
+                           **({} if pb.formulation == "galerkin" else {"C_star": 4.0}),
                            "kelvin_voigt": pb.tau},
         **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
         "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
@@ -641,7 +652,7 @@ def build(scene: Scene) -> Simulation:
     points = _point_rows(pb, y0, scene["output.points"]) if scene["output.points"] else None
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities, points),
                      final_state=final_state, info=info, snapshot=ShapeRecorder(pb.space),
-                     to_arrays=lambda y: y.arrays(), from_arrays=lambda a: BeamState(**a),
+                     to_arrays=lambda y: y.arrays(), from_arrays=lambda a: type(y0)(**a),
                      conserved=pb.mechanical_energy, stability=stability(scene, pb),
                      frames=_frames(pb, fields), mode_shape=_mode_shape(pb, y0),
                      fields=(lambda y: {f"section_{k}": v for k, v in pb.section_fields(y, fields).items()})
@@ -661,7 +672,8 @@ def _mode_shape(pb: BeamProblem, y0, n_points: int = 101):
 def _frames(pb: BeamProblem, fields=()):
     """Centreline at the collocation points, their section frames, arc lengths and the
     requested section ``fields`` (``Simulation.frames``, the ParaView series)."""
-    N0, s_c = np.asarray(pb.space.N0), np.asarray(pb.space.s_c, dtype=float)
+    _, N0, s_c = pb.frame_points
+    N0, s_c = np.asarray(N0), np.asarray(s_c, dtype=float)
     if fields:
         return lambda y: (N0 @ y.c, y.R, {"s": s_c, **pb.section_fields(y, fields)})
     return lambda y: (N0 @ y.c, y.R, {"s": s_c})
@@ -675,13 +687,18 @@ REMEDY = ('try material.kelvin_voigt = "auto" (the least damping that removes gr
           'value, or another space.n_ctrl (docs/verification.md, "Stability maps")')
 
 
+def describe_formulation(formulation: str) -> str:
+    """``"primal collocation"``, ``"mixed collocation"`` or ``"galerkin"``."""
+    return formulation if formulation == "galerkin" else f"{formulation} collocation"
+
+
 def stability(scene: Scene, pb: BeamProblem) -> Stability:
     """Guard hooks of a beam: power-iteration spectral radius, dense growth check (up to
     :data:`PROBE_MAX_UNKNOWNS` unknowns), rest test."""
     from ..integrators import growth_check, spectral_radius
 
     kv = f", kelvin_voigt = {pb.tau:.3g} s" if pb.tau > 0 else ""
-    describe = (f"{pb.formulation} collocation, p={scene['space.degree']}, n_ctrl={scene['space.n_ctrl']}{kv}")
+    describe = (f"{describe_formulation(pb.formulation)}, p={scene['space.degree']}, n_ctrl={scene['space.n_ctrl']}{kv}")
 
     def growth(t, y, duration):
         if 12 * pb.n > PROBE_MAX_UNKNOWNS:

@@ -1,4 +1,5 @@
-"""Geometrically exact beam: explicit RKMK isogeometric collocation (Ferri & Marino)."""
+"""Geometrically exact beam: explicit RKMK isogeometric collocation (Ferri & Marino) and the
+isogeometric Galerkin (weak) form."""
 
 from .kinematics import curvature_update, jr_theta_s_derivative, jr_times, strains
 from .model import (
@@ -12,10 +13,11 @@ from .model import (
     SectionConstants,
     SupportMotion,
 )
+from .galerkin import GalerkinBeamProblem, GalerkinBeamState
 from .problem import BeamProblem, BeamState, quadrature_weights
 
 __all__ = [
-    "BeamProblem", "BeamState", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
+    "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
     "BoundaryConditions", "SupportMotion", "InitialConditions", "curvature_update", "jr_times",
     "jr_theta_s_derivative", "strains", "quadrature_weights",
 ]

@@ -33,6 +33,9 @@ C_STAR = 4.0
 
 #: Spatial discretizations of the balance laws (:class:`BeamProblem` ``formulation``).
 FORMULATIONS = ("primal", "mixed")
+#: Every beam formulation: the two collocation ones and the weak form
+#: (:class:`~.galerkin.GalerkinBeamProblem`, ``"galerkin"``).
+ALL_FORMULATIONS = FORMULATIONS + ("galerkin",)
 
 
 @dataclass
@@ -214,6 +217,12 @@ class BeamProblem(Problem):
         """The same problem (space, data, backend, formulation) with damping ``tau`` [s]."""
         return BeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial, backend=self.backend,
                            kelvin_voigt=tau, formulation=self.formulation)
+
+    @property
+    def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(u, basis, s)`` of the points that carry the rotations ``R`` (the collocation
+        points): parameters ``(n,)``, basis values ``N0`` ``(n, n)``, reference arc lengths."""
+        return self.space.u_c, self.space.N0, self.space.s_c
 
     # ------------------------------------------------------------------ set-up
     @staticmethod

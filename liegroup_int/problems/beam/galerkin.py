@@ -1,0 +1,466 @@
+"""Geometrically exact beam in weak (isogeometric Galerkin) form, as an RKMK plugin.
+
+Same basis, loads and end conditions as the collocation formulations
+(:class:`~.problem.BeamProblem`); docs/theory.md section 15 derives the equations.
+
+State (:class:`GalerkinBeamState`) at time ``t_n``:
+
+* ``c, v``: control values of centroid position and velocity, ``(n, 3)``;
+* ``w``: control values of the *material* angular velocity ``Omega = R^T omega``, ``(n, 3)``
+  (its mass matrix ``J M`` is then constant);
+* ``R, K``: rotations and material curvature at the points of the
+  :class:`~liegroup_int.iga.GalerkinSpace` (Gauss points and ends), ``(m, 3, 3)``, ``(m, 3)``.
+
+Increment (``(4, n, 3)``): control values of ``(eta, Theta, dv, dW)``. The action adds
+``eta, dv, dW`` to ``c, v, w``, turns the point rotations by the interpolated *right*
+increment, ``R <- R exp(hat(Theta))``, and updates ``K <- exp(-Theta) K + J_r(Theta) Theta_s``.
+The stage rate solves, with the consistent mass matrix ``M`` factored once,
+
+    eta' = v,   M Theta' = P[dexpinv_{-Theta} Omega],
+    mu M v' = -int N' n + int N q + F,
+    J M W' = -int (N' M + N (M x K)) + int N (Gamma~ x N) - int N (Omega x J Omega)
+             + int N R^T m_d + R^T C
+
+(``N`` the basis, ``Gamma~ = R^T c_s``; end loads ``F, C`` on the end control values;
+Dirichlet values imposed strongly on the end control values). The stiffness terms are the
+gradient of the strain energy at the same quadrature, so the semi-discrete energy
+``1/2 mu v.Mv + 1/2 W.(J M)W + U`` is conserved for conservative loads.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...groups.so3 import SO3, angle, cross, dexpinv_so3, exp_so3
+from ...iga import CollocationSpace
+from ...iga.galerkin import BandedSPD, GalerkinSpace
+from ...integrators import Problem
+from .kinematics import jr_times, rot, rot_T
+from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
+
+#: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
+INTEGRATIONS = ("reduced", "full")
+
+#: Section quantities :meth:`GalerkinBeamProblem.section_fields` computes.
+SECTION_FIELDS = ("Gamma", "K", "N", "M", "n", "m", "velocity", "angular_velocity")
+
+
+@dataclass
+class GalerkinBeamState:
+    """Galerkin beam state (see the module docstring); ``w`` is the material angular
+    velocity's control values."""
+
+    c: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    R: np.ndarray
+    K: np.ndarray
+
+    def copy(self) -> "GalerkinBeamState":
+        return GalerkinBeamState(self.c.copy(), self.v.copy(), self.w.copy(), self.R.copy(), self.K.copy())
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K}
+
+
+@dataclass(frozen=True)
+class _GEnd:
+    """One end: its control index, point index, outward normal, supports, loads."""
+
+    index: int
+    point: int
+    normal: float
+    fix_position: bool
+    fix_rotation: bool
+    load: object
+    motion: object = None
+    translation: object = None
+
+    @property
+    def name(self) -> str:
+        return "start" if self.normal < 0 else "end"
+
+
+class GalerkinBeamProblem(Problem):
+    """Explicit RKMK isogeometric Galerkin beam (``space.formulation = "galerkin"``).
+
+    Parameters
+    ----------
+    space : CollocationSpace
+        Basis and reference geometry (one patch).
+    constants : SectionConstants
+    bcs, loads, initial
+        As :class:`~.problem.BeamProblem` (point loads at joints are not supported).
+    backend : {"numpy", "numba"}
+    kelvin_voigt : float
+        Retardation time [s] of the strain-rate damping, as :class:`~.problem.BeamProblem`.
+    integration : {"reduced", "full"}
+        Gauss points per knot interval for the axial and shear terms: ``p`` (reduced,
+        the default: locking-free at low degree) or ``p + 1``.
+    """
+
+    formulation = "galerkin"
+    mixed = False
+
+    def __init__(self, space: CollocationSpace, constants: SectionConstants,
+                 bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
+                 initial: InitialConditions = InitialConditions(), backend: str = "numpy",
+                 kelvin_voigt: float = 0.0, integration: str = "reduced"):
+        if integration not in INTEGRATIONS:
+            raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
+        if not isinstance(constants, SectionConstants):
+            raise ValueError("constants: the Galerkin formulation takes one SectionConstants (one member)")
+        if loads.joints:
+            raise ValueError("loads.joints: point loads need joints; the Galerkin formulation takes one member")
+        kelvin_voigt = float(kelvin_voigt)
+        if not (np.isfinite(kelvin_voigt) and kelvin_voigt >= 0.0):
+            raise ValueError(f"kelvin_voigt: expected a retardation time >= 0 [s], got {kelvin_voigt!r}")
+        if backend not in ("numpy", "numba"):
+            raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
+        self.tau = kelvin_voigt
+        self.damping_report = None
+        self.integration = integration
+        self.space, self.constants = space, constants
+        self.bcs, self.loads, self.initial = bcs, loads, initial
+        self.backend = backend
+        self.gs = GalerkinSpace(space, reduced=integration == "reduced")
+        gs = self.gs
+        self.n, self.m = gs.n, gs.m
+        self.CN = np.asarray(constants.CN, float)
+        self.CM = np.asarray(constants.CM, float)
+        self.mu = float(constants.mu)
+        self.Jm = np.asarray(constants.Jm, float)
+        self.B0, self.B1 = gs.B0, gs.B1
+        self.wf, self.wa = gs.w_full, gs.w_axial
+        self.q = np.asarray(loads.distributed_force, float) + self.mu * np.asarray(loads.gravity, float)
+        self.has_q = bool(np.any(self.q))
+        self.m_dist = np.asarray(loads.distributed_couple, float)
+        self.has_m = bool(np.any(self.m_dist))
+        self.load_weights = gs.B0.T @ gs.w_full  # int N_i ds, (n,)
+        n, m = self.n, self.m
+        self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
+                     self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
+        self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
+        self.translating_ends = tuple(e for e in self.ends if e.translation is not None)
+        self.loaded_ends = tuple(e for e in self.ends if e.load.active)
+        self.joints = ()
+        fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
+        for e in self.ends:
+            fixp[e.index] |= e.fix_position
+            fixr[e.index] |= e.fix_rotation
+        self.fix_position, self.fix_rotation = fixp, fixr
+        self.mass_position = BandedSPD(gs.mass, fixp)
+        self.mass_rotation = BandedSPD(gs.mass, fixr)
+        self.quad = gs.w_full
+        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
+                                   or self.translating_ends or self.loaded_ends)
+        self._nb_kernels = None
+        if backend == "numba":
+            import importlib.util
+
+            if importlib.util.find_spec("numba") is None:  # pragma: no cover - depends on the environment
+                raise ImportError("backend='numba' needs numba (pip install numba); use backend='numpy'")
+
+    # ------------------------------------------------------------------ set-up
+    @staticmethod
+    def _end(index, point, normal, kind, load, motion, translation):
+        where = "start" if normal < 0 else "end"
+        if kind == "clamped" and load.active:
+            raise ValueError(f"loads.{where}: a load on a clamped end does no work; remove it or free the end")
+        if kind == "hinged" and np.any(load.force):
+            raise ValueError(f"loads.{where}.force: a force on a hinged end is taken by the support; remove it "
+                             "or free the end")
+        return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged"),
+                     fix_rotation=kind == "clamped", load=load, motion=motion, translation=translation)
+
+    @property
+    def _nb(self):
+        if self._nb_kernels is None and self.backend == "numba":
+            from .galerkin_numba import NumbaGalerkinKernels
+
+            self._nb_kernels = NumbaGalerkinKernels(self)
+        return self._nb_kernels
+
+    def with_kelvin_voigt(self, tau: float) -> "GalerkinBeamProblem":
+        """The same problem with damping ``tau`` [s]."""
+        return GalerkinBeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial,
+                                   backend=self.backend, kelvin_voigt=tau, integration=self.integration)
+
+    @property
+    def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(u, basis, s)`` of the points that carry the rotations ``R``: parameters
+        ``(m,)``, basis values ``(m, n)`` and reference arc lengths ``(m,)``."""
+        return self.gs.u, self.gs.B0, self.gs.s
+
+    def initial_state(self) -> GalerkinBeamState:
+        """Reference configuration with the initial velocity field."""
+        sp, gs = self.space, self.gs
+        c = np.array(sp.curve.control_points, dtype=float)
+        ic = self.initial
+        omega = np.asarray(ic.omega, float)
+        v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
+                                                     sp.c0 - np.asarray(ic.axis_point, float))
+        v = sp.solve(v_c)  # a rigid velocity field lies in the (rational) trial space
+        w = gs.project(rot_T(gs.R0, np.broadcast_to(omega, (self.m, 3)))) if np.any(omega) else np.zeros((self.n, 3))
+        R = np.array(gs.R0)
+        for e in self.ends:
+            if e.fix_position and np.any(v[e.index]):
+                raise ValueError(f"initial: the velocity field moves the supported end at s = "
+                                 f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
+            if e.translation is not None:
+                v[e.index] = e.translation.velocity(0.0) * e.translation.unit_axis
+            if e.motion is not None:
+                a = e.motion.unit_axis
+                if np.any(omega) and not np.allclose(omega, e.motion.velocity(0.0) * a, rtol=1e-12, atol=0.0):
+                    raise ValueError("initial.omega: differs from the prescribed rotation rate of the support at t = 0")
+                w[e.index] = e.motion.velocity(0.0) * (gs.R0[e.point].T @ a)
+            elif e.fix_rotation:
+                if np.any(omega):
+                    raise ValueError("initial.omega: a clamped end cannot rotate")
+                w[e.index] = 0.0
+        return GalerkinBeamState(c, v, w, R, np.array(gs.K0))
+
+    # ------------------------------------------------------------------ RKMK contract
+    def zero_increment(self, y) -> np.ndarray:
+        return np.zeros((4, self.n, 3))
+
+    def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
+        if self._nb is not None:
+            return self._nb.action(u, y)
+        th, th_s = self.B0 @ u[1], self.B1 @ u[1]
+        E = exp_so3(th)
+        K = rot_T(E, y.K) + jr_times(th, th_s)
+        return GalerkinBeamState(y.c + u[0], y.v + u[2], y.w + u[3], y.R @ E, K)
+
+    def end_step(self, y: GalerkinBeamState) -> GalerkinBeamState:
+        """One Newton-Schulz step on the point rotations (as :meth:`BeamProblem.end_step`)."""
+        y.R = SO3.normalize(y.R)
+        return y
+
+    def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """Right-trivialized ``dexpinv_{-Theta}`` at the points, projected (``M^-1``)."""
+        out = np.array(w, dtype=float, copy=True)
+        out[1] = self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), self.B0 @ w[1]), w[1])
+        return out
+
+    def _project_rotation(self, values: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """``M^-1 int N values`` with the clamped rows set to ``ends`` rows."""
+        rhs = self.B0.T @ (self.wf[:, None] * values)
+        return self.mass_rotation.solve(rhs, ends[self.fix_rotation])
+
+    def vector_field(self, t: float, y: GalerkinBeamState) -> np.ndarray:
+        return self.increment_rate(t, y, np.zeros((4, self.n, 3)))
+
+    def increment_rate(self, t: float, y: GalerkinBeamState, u: np.ndarray) -> np.ndarray:
+        if self._nb is not None:
+            return self._nb.increment_rate(t, y, u)
+        out = np.empty((4, self.n, 3))
+        out[0] = y.v
+        Om = self.B0 @ y.w
+        # Theta' = dexpinv_{-Theta}(Omega), projected; at a clamp Theta' = W (parallel)
+        out[1] = self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w)
+        F, T = self._forces(t, y, Om)
+        out[2] = self.mass_position.solve(F / self.mu, self._prescribed_acceleration(t, "position"))
+        out[3] = self.mass_rotation.solve(T / self.Jm, self._prescribed_acceleration(t, "rotation"))
+        return out
+
+    def _prescribed_acceleration(self, t: float, which: str) -> np.ndarray:
+        """Rows of the supported control values' accelerations (zero unless moving)."""
+        fixed = self.fix_position if which == "position" else self.fix_rotation
+        out = np.zeros((self.n, 3))
+        for e in self.ends:
+            if which == "position" and e.translation is not None:
+                out[e.index] = e.translation.acceleration(t) * e.translation.unit_axis
+            if which == "rotation" and e.motion is not None:
+                out[e.index] = e.motion.acceleration(t) * (self.gs.R0[e.point].T @ e.motion.unit_axis)
+        return out[fixed]
+
+    def _resultants(self, y: GalerkinBeamState, Om: np.ndarray):
+        """``Gamma~ = R^T c_s``, material resultants ``N, M`` at the points (with the
+        Kelvin-Voigt part), the strain rates (or None)."""
+        R, K = y.R, y.K
+        c_s = self.B1 @ y.c
+        Gt = rot_T(R, c_s)
+        gam = Gt - self.gs.gamma0
+        kap = K - self.gs.K0
+        if self.tau > 0.0:
+            gd, kd = self._strain_rates(y, Gt, Om)
+            gam, kap = gam + self.tau * gd, kap + self.tau * kd
+        return Gt, self.CN * gam, self.CM * kap
+
+    def _strain_rates(self, y, Gt, Om):
+        """``dGamma/dt = R^T v_s - Omega x Gamma~`` and ``dK/dt = Omega_s + K x Omega``."""
+        gd = rot_T(y.R, self.B1 @ y.v) - cross(Om, Gt)
+        kd = self.B1 @ y.w + cross(y.K, Om)
+        return gd, kd
+
+    def _forces(self, t: float, y: GalerkinBeamState, Om: np.ndarray):
+        """Generalized forces on the control values: ``F`` (spatial) and ``T`` (material),
+        ``(n, 3)`` each (internal, inertial and external; no Dirichlet rows)."""
+        R, K = y.R, y.K
+        Gt, N, M = self._resultants(y, Om)
+        wa, wf = self.wa[:, None], self.wf[:, None]
+        F = -(self.B1.T @ (wa * rot(R, N)))
+        pt = wa * cross(Gt, N) - wf * (cross(M, K) + cross(Om, self.Jm * Om))
+        f = self.loads.distributed_profile(t) if (self.has_q or self.has_m) else 0.0
+        if self.has_m:
+            pt = pt + f * wf * rot_T(R, np.broadcast_to(self.m_dist, Om.shape))
+        T = self.B0.T @ pt - self.B1.T @ (wf * M)
+        if self.has_q:
+            F += f * self.load_weights[:, None] * self.q
+        for e in self.loaded_ends:
+            ld, Re = e.load, R[e.point]
+            if np.any(ld.force):
+                F[e.index] += self._end_force(ld, t, Re)
+            if np.any(ld.couple):
+                T[e.index] += Re.T @ self._end_couple(ld, t, Re)
+        return F, T
+
+    @staticmethod
+    def _end_force(ld, t: float, R_end: np.ndarray) -> np.ndarray:
+        f = np.asarray(ld.force, float) * ld.force_profile(t)
+        return R_end @ f if ld.follower else f
+
+    @staticmethod
+    def _end_couple(ld, t: float, R_end: np.ndarray) -> np.ndarray:
+        m = np.asarray(ld.couple, float) * ld.couple_profile(t)
+        return R_end @ m if ld.follower else m
+
+    def increment_scale(self, y) -> np.ndarray:
+        scale = np.ones((4, self.n, 3))
+        scale[0] = np.abs(y.c)
+        return scale
+
+    def rotation_angle(self, u: np.ndarray) -> float:
+        return float(np.max(angle(self.B0 @ u[1])))
+
+    def compiled_kernels(self):
+        """The compiled engine's kernels (backend="numba"), else ``None``."""
+        if self._nb is None:
+            return None
+        return self._nb.compiled_problem()
+
+    # ------------------------------------------------------------------ reactions and power
+    def _support_loads(self, t: float, y: GalerkinBeamState):
+        """Force (spatial) and couple (material) each support exerts on its control value:
+        the residual of that row, ``mu (M v')_d - F_d`` and ``J (M W')_d - T_d``."""
+        k = self.increment_rate(t, y, np.zeros((4, self.n, 3))) if self._nb is None else \
+            self._nb.increment_rate(t, y, np.zeros((4, self.n, 3)))
+        F, T = self._forces(t, y, self.B0 @ y.w)
+        M = self.gs.mass
+        out = {}
+        for e in self.ends:
+            if e.fix_position or e.fix_rotation:
+                f = self.mu * (M[e.index] @ k[2]) - F[e.index] if e.fix_position else np.zeros(3)
+                c = self.Jm * (M[e.index] @ k[3]) - T[e.index] if e.fix_rotation else np.zeros(3)
+                out[e.name] = (f, c)
+        return out
+
+    def quadrature_rate(self, t: float, y: GalerkinBeamState) -> float:
+        """Power of the external loads and supports minus the viscous dissipation [W]
+        (as :meth:`BeamProblem.quadrature_rate`, with the Galerkin quadrature)."""
+        p = 0.0
+        Om = self.B0 @ y.w
+        if self.tau > 0.0:
+            Gt = rot_T(y.R, self.B1 @ y.c)
+            gd, kd = self._strain_rates(y, Gt, Om)
+            p -= self.tau * float(self.wa @ np.sum(self.CN * gd**2, axis=1) + self.wf @ np.sum(self.CM * kd**2, axis=1))
+        if self.has_q or self.has_m:
+            f = self.loads.distributed_profile(t)
+            if self.has_q:
+                p += f * float(self.q @ (self.load_weights @ y.v))
+            if self.has_m:
+                p += f * float(np.sum(self.wf[:, None] * rot_T(y.R, np.broadcast_to(self.m_dist, Om.shape)) * Om))
+        if self.moving_ends or self.translating_ends:
+            sup = self._support_loads(t, y)
+            for e in self.moving_ends:
+                p += float(sup[e.name][1] @ y.w[e.index])
+            for e in self.translating_ends:
+                p += float(sup[e.name][0] @ y.v[e.index])
+        for e in self.loaded_ends:
+            ld, Re = e.load, y.R[e.point]
+            if np.any(ld.force):
+                p += float(self._end_force(ld, t, Re) @ y.v[e.index])
+            if np.any(ld.couple):
+                p += float((Re.T @ self._end_couple(ld, t, Re)) @ y.w[e.index])
+        return p
+
+    # ------------------------------------------------------------------ diagnostics
+    def tip(self, y) -> np.ndarray:
+        return y.c[-1].copy()
+
+    def energy_parts(self, y, t: float = 0.0) -> dict[str, float]:
+        """Kinetic (consistent mass), strain and load-potential energy [J]."""
+        M = self.gs.mass
+        kin = 0.5 * (self.mu * float(np.sum(y.v * (M @ y.v))) + float(np.sum(self.Jm * y.w * (M @ y.w))))
+        Gt, N, Mm = self._resultants_elastic(y)
+        strain = 0.5 * (float(self.wa @ np.sum(N * (Gt - self.gs.gamma0), axis=1))
+                        + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1)))
+        potential = 0.0
+        if self.has_q:
+            potential -= self.loads.distributed_profile(t) * float(self.q @ (self.load_weights @ y.c))
+        for e in self.loaded_ends:
+            ld = e.load
+            if np.any(ld.force) and ld.force_profile.is_constant and not ld.follower:
+                potential -= float(np.dot(ld.force, y.c[e.index]))
+        return {"kinetic": kin, "strain": strain, "potential": potential}
+
+    def _resultants_elastic(self, y):
+        Gt = rot_T(y.R, self.B1 @ y.c)
+        return Gt, self.CN * (Gt - self.gs.gamma0), self.CM * (y.K - self.gs.K0)
+
+    def mechanical_energy(self, y) -> float:
+        p = self.energy_parts(y)
+        return p["kinetic"] + p["strain"]
+
+    def energy(self, y, t: float = 0.0) -> float:
+        p = self.energy_parts(y, t)
+        return p["kinetic"] + p["strain"] + p["potential"]
+
+    def momentum(self, y) -> tuple[np.ndarray, np.ndarray]:
+        """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
+        c, v, Om = self.B0 @ y.c, self.B0 @ y.v, self.B0 @ y.w
+        wf = self.wf[:, None]
+        h = cross(c, self.mu * v) + rot(y.R, self.Jm * Om)
+        return self.mu * (self.load_weights @ y.v), np.sum(wf * h, axis=0)
+
+    def orth_error(self, y) -> float:
+        E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)
+        return float(np.sqrt(np.max(np.einsum("nij,nij->n", E, E))))
+
+    def section_fields(self, y, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
+        """Section quantities at the points (:attr:`frame_points`), ``(m, 3)`` each, as
+        :meth:`BeamProblem.section_fields`."""
+        want = set(names)
+        unknown = want - set(SECTION_FIELDS)
+        if unknown:
+            raise ValueError(f"unknown section field(s) {sorted(unknown)}; known: {', '.join(SECTION_FIELDS)}")
+        out = {}
+        Om = self.B0 @ y.w
+        if want & {"Gamma", "N", "n", "K", "M", "m"}:
+            Gt, N, M = self._resultants(y, Om)
+            out.update({"Gamma": Gt - self.gs.gamma0, "K": y.K - self.gs.K0, "N": N, "M": M,
+                        "n": rot(y.R, N), "m": rot(y.R, M)})
+        if "velocity" in want:
+            out["velocity"] = self.B0 @ y.v
+        if "angular_velocity" in want:
+            out["angular_velocity"] = rot(y.R, Om)
+        return {k: out[k] for k in names if k in out}
+
+    def supports(self) -> dict[str, int]:
+        return {e.name: e.index for e in self.ends if e.fix_position}
+
+    def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Force and couple (spatial) each support exerts on the beam: the residuals of the
+        supported rows of the weak form (variationally consistent reactions). A hinge
+        takes no couple (zero)."""
+        sup = self._support_loads(t, y)
+        return {e.name: (sup[e.name][0], y.R[e.point] @ sup[e.name][1]) for e in self.ends if e.fix_position}
+
+    def centreline(self, y, u: np.ndarray) -> np.ndarray:
+        return self.space.point_matrix(u) @ y.c
+
+    def is_finite(self, y) -> bool:
+        return bool(np.all(np.isfinite(y.c)) and np.all(np.isfinite(y.R)))
