@@ -41,6 +41,8 @@ KERNEL_SETS: dict[str, KernelSet] = {
     "rigid_body_adaptive": KernelSet("rigid_body_adaptive", "heavy_top", _ADAPTIVE, "rigid body, adaptive pairs"),
     "beam_mixed": KernelSet("beam_mixed", "cantilever", ("space.formulation=mixed",),
                             "beam, mixed collocation, fixed step"),
+    "beam_galerkin": KernelSet("beam_galerkin", "cantilever", ("space.formulation=galerkin",),
+                               "beam, Galerkin (weak form), fixed step"),
     "beam_mixed_adaptive": KernelSet("beam_mixed_adaptive", "cantilever", ("space.formulation=mixed",) + _ADAPTIVE,
                                      "beam, mixed collocation, adaptive pairs"),
 }

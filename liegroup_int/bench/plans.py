@@ -35,7 +35,8 @@ class Plan:
     discretizations : tuple of (int, int)
         ``(degree, n_ctrl)`` of our runs at each method's stable step.
     formulations : tuple of str
-        Spatial formulations of those runs (``"primal"``, ``"mixed"``; ``space.formulation``).
+        Spatial formulations of those runs (``"primal"``, ``"mixed"``, ``"galerkin"``;
+        ``space.formulation``).
         Primal runs are undamped; mixed runs carry the Kelvin-Voigt damping sized from the
         dense spectrum at rest (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`).
         The reference and the time study are primal whatever this says.
@@ -63,7 +64,7 @@ class Plan:
     reference: tuple[int, int]
     reference_y: float
     discretizations: tuple[tuple[int, int], ...]
-    formulations: tuple[str, ...] = ("primal", "mixed")
+    formulations: tuple[str, ...] = ("primal", "mixed", "galerkin")
     time_study: tuple[int, int] = (4, 31)
     methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65")
     dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)

@@ -30,7 +30,7 @@ CASES = {
 }
 
 
-@pytest.fixture(scope="module", params=["primal", "mixed"])
+@pytest.fixture(scope="module", params=["primal", "mixed", "galerkin"])
 def pendulum(request):
     pb = problem(load_scene("pendulum", {"space.degree": 4, "space.n_ctrl": 31, "space.formulation": request.param}))
     y0 = pb.initial_state()
