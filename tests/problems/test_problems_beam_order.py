@@ -11,7 +11,8 @@ over long runs, so they are fitted over 0.01 s; RKMK4 and RKMK6 over 0.1 s.
 RKMK2 is fitted at |lambda| h = 0.15..0.0375 (at 0.3 the mixed run is not yet
 asymptotic: local slopes 2.83, 1.96). Measured slopes: 2.08, 2.91, 4.02, 6.02 (primal) and
 1.97, 2.86, 4.11, 6.22 (mixed, whose spectrum at rest has a +9 1/s pair: under one e-fold
-over these spans).
+over these spans) and 1.79, 2.91, 3.88, 5.96 (Galerkin; RKMK4 and RKMK6 over 0.3 s, see
+GALERKIN_CASES).
 """
 
 import numpy as np
@@ -30,6 +31,13 @@ CASES = {
 }
 
 
+#: The Galerkin pendulum's RKMK4 and RKMK6 errors over 0.1 s decay faster than their order
+#: (local slopes 4.9/4.7 and 6.9/7.0: the top modes' start-up error still dominates); over
+#: 0.3 s they are asymptotic (local slopes 3.82, 3.99, 4.01 at |lambda| h = 0.3 .. 0.1 and
+#: 6.01, 5.91 at 0.6 .. 0.3).
+GALERKIN_CASES = {"rkmk4": (4, 0.3, [0.3, 0.2, 0.15]), "rkmk6": (6, 0.3, [0.6, 0.42, 0.3])}
+
+
 @pytest.fixture(scope="module", params=["primal", "mixed", "galerkin"])
 def pendulum(request):
     pb = problem(load_scene("pendulum", {"space.degree": 4, "space.n_ctrl": 31, "space.formulation": request.param}))
@@ -40,13 +48,16 @@ def pendulum(request):
 @pytest.fixture(scope="module")
 def references(pendulum):
     pb, y0, lam = pendulum
-    return {T: integrate_fixed(pb, resolve_method("rkmk6"), (0.0, T), y0, 0.05 / lam)[1].v for T in (0.01, 0.1)}
+    refs = {T: integrate_fixed(pb, resolve_method("rkmk6"), (0.0, T), y0, 0.05 / lam)[1].v for T in (0.01, 0.1)}
+    if pb.formulation == "galerkin":  # RKMK6 at |lambda| h = 0.1 is 1e-11 from the finer reference
+        refs[0.3] = integrate_fixed(pb, resolve_method("rkmk6"), (0.0, 0.3), y0, 0.1 / lam)[1].v
+    return refs
 
 
 @pytest.mark.parametrize("method", sorted(CASES))
 def test_pendulum_time_order(method, pendulum, references):
     pb, y0, lam = pendulum
-    order, T, ys = CASES[method]
+    order, T, ys = GALERKIN_CASES.get(method, CASES[method]) if pb.formulation == "galerkin" else CASES[method]
     hs = np.array(ys) / lam
     errs = [np.abs(integrate_fixed(pb, resolve_method(method), (0.0, T), y0, h)[1].v - references[T]).max() for h in hs]
     slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
