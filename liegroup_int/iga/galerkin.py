@@ -82,68 +82,108 @@ class BandedSPD:
         return self._solve((self.factor, False), b, check_finite=False)
 
 
+def _patch_points(space: CollocationSpace, reduced: bool) -> dict:
+    """Points, weights, basis and reference frames of one patch (local parameter)."""
+    p = space.degree
+    knots = space.curve.knots
+    uf, wf = gauss_points(knots, p + 1)
+    parts = [(uf, wf, np.zeros_like(wf))]
+    if reduced:
+        ur, wr = gauss_points(knots, p)
+        parts.append((ur, np.zeros_like(wr), wr))
+    parts.append((np.array([0.0, 1.0]), np.zeros(2), np.zeros(2)))
+    u = np.concatenate([x[0] for x in parts])
+    wb = np.concatenate([x[1] for x in parts])
+    wa = np.concatenate([x[2] for x in parts])
+    order = np.argsort(u, kind="stable")
+    u, wb, wa = u[order], wb[order], wa[order]
+    basis = space.basis_s(u)
+    jac = np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
+    R0, K0, _ = space.frame(u)
+    t = space.curve.evaluate(u, 1)[1] / jac[:, None]
+    return {"u": u, "B0": basis[0], "B1": basis[1], "w_full": wb * jac,
+            "w_axial": (wa if reduced else wb) * jac, "R0": R0, "K0": K0,
+            "gamma0": np.einsum("nji,nj->ni", R0, t), "s": space.arc_length(u)}
+
+
+def _block_diag(blocks) -> np.ndarray:
+    rows, cols = sum(b.shape[0] for b in blocks), sum(b.shape[1] for b in blocks)
+    out = np.zeros((rows, cols))
+    i = j = 0
+    for b in blocks:
+        out[i:i + b.shape[0], j:j + b.shape[1]] = b
+        i, j = i + b.shape[0], j + b.shape[1]
+    return out
+
+
 class GalerkinSpace:
-    """Gauss points, weights and basis matrices of a :class:`CollocationSpace`'s basis.
+    """Gauss points, weights and basis matrices of a collocation space's basis.
 
     Parameters
     ----------
-    space : CollocationSpace
-        Basis and reference geometry (one patch).
+    space : CollocationSpace or PatchedSpace
+        Basis and reference geometry; a :class:`~liegroup_int.iga.patches.PatchedSpace`
+        (a chain of members) gives each patch its own points, in chain order, with the
+        global parameter and arc length of the chain.
     reduced : bool
         ``p`` Gauss points per interval for the axial and shear terms (else ``p + 1``).
 
     Attributes
     ----------
     u : numpy.ndarray, shape (m,)
-        Parameters of the points (sorted; ``u[0] = 0``, ``u[-1] = 1``).
+        Parameters of the points (sorted; each patch starts and ends with a point of weight 0).
     s : numpy.ndarray, shape (m,)
         Their reference arc length.
     B0, B1 : numpy.ndarray, shape (m, n)
-        Basis values and arc-length derivatives there.
+        Basis values and arc-length derivatives there (block-diagonal over patches).
     w_full, w_axial : numpy.ndarray, shape (m,)
         Arc-length weights of the full rule (bending, inertia, loads) and of the axial and
         shear terms (the full or the reduced rule); zero at the other points.
     R0 : numpy.ndarray, shape (m, 3, 3)
         Reference material frames; ``K0`` ``(m, 3)`` their curvature, and ``gamma0``
         ``(m, 3)`` = ``R0^T c0_s`` (``e3``).
+    point_patch : numpy.ndarray of int, shape (m,)
+        Patch of each point.
+    patch_ends : tuple of (int, int)
+        First and last point of each patch.
     mass : numpy.ndarray, shape (n, n)
         ``M_ij = int N_i N_j ds`` (full rule), banded with half-bandwidth ``p``.
     """
 
-    def __init__(self, space: CollocationSpace, reduced: bool = False):
-        if hasattr(space, "patches"):
-            raise ValueError("the Galerkin formulation takes one patch (frames of members: use collocation)")
+    def __init__(self, space, reduced: bool = False):
         self.space = space
         self.reduced = bool(reduced)
-        p = space.degree
-        knots = space.curve.knots
-        uf, wf = gauss_points(knots, p + 1)
-        parts = [(uf, wf, np.zeros_like(wf), 0)]
-        if self.reduced:
-            ur, wr = gauss_points(knots, p)
-            parts.append((ur, np.zeros_like(wr), wr, 1))
-        parts.append((np.array([0.0, 1.0]), np.zeros(2), np.zeros(2), 2))
-        u = np.concatenate([x[0] for x in parts])
-        wb = np.concatenate([x[1] for x in parts])
-        wa = np.concatenate([x[2] for x in parts])
-        order = np.argsort(u, kind="stable")
-        u, wb, wa = u[order], wb[order], wa[order]
-        basis = space.basis_s(u)
-        jac = np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
-        self.u = _frozen(u)
-        self.B0 = _frozen(basis[0])
-        self.B1 = _frozen(basis[1])
-        self.w_full = _frozen(wb * jac)
-        self.w_axial = _frozen(wa * jac) if self.reduced else self.w_full
-        R0, K0, _ = space.frame(u)
-        self.R0 = _frozen(R0)
-        self.K0 = _frozen(K0)
-        t = space.curve.evaluate(u, 1)[1] / jac[:, None]
-        self.gamma0 = _frozen(np.einsum("nji,nj->ni", R0, t))
-        self.s = _frozen(space.arc_length(u))
-        self.m = u.size
+        patches = getattr(space, "patches", None)
+        if patches is None:
+            parts = [_patch_points(space, self.reduced)]
+        else:
+            parts = [_patch_points(sp, self.reduced) for sp in patches]
+            edges = np.asarray(space._u_edges, dtype=float)
+            s_edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in patches])])
+            for k, d in enumerate(parts):
+                d["u"] = edges[k] + (edges[k + 1] - edges[k]) * d["u"]
+                d["s"] = s_edges[k] + d["s"]
+        cat = {k: np.concatenate([d[k] for d in parts]) for k in ("u", "w_full", "w_axial", "R0", "K0", "gamma0", "s")}
+        self.u = _frozen(cat["u"])
+        self.B0 = _frozen(_block_diag([d["B0"] for d in parts]))
+        self.B1 = _frozen(_block_diag([d["B1"] for d in parts]))
+        self.w_full = _frozen(cat["w_full"])
+        self.w_axial = _frozen(cat["w_axial"])
+        self.R0 = _frozen(cat["R0"])
+        self.K0 = _frozen(cat["K0"])
+        self.gamma0 = _frozen(cat["gamma0"])
+        self.s = _frozen(cat["s"])
+        sizes = [d["u"].size for d in parts]
+        self.point_patch = _frozen(np.repeat(np.arange(len(parts)), sizes))
+        first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        self.patch_ends = tuple((int(a), int(a + m - 1)) for a, m in zip(first, sizes))
+        self.m = self.u.size
         self.n = space.n_ctrl
-        self.mass = _frozen((self.B0 * self.w_full[:, None]).T @ self.B0)
+        self.mass = _frozen(self.weighted_mass(np.ones(self.m)))
+
+    def weighted_mass(self, density: np.ndarray) -> np.ndarray:
+        """``int rho N_i N_j ds`` with ``rho`` given at the points, ``(n, n)``."""
+        return (self.B0 * (self.w_full * density)[:, None]).T @ self.B0
 
     def project(self, values: np.ndarray) -> np.ndarray:
         """L2 projection onto the basis of values at the points, ``(m, k) -> (n, k)``."""

@@ -20,7 +20,7 @@ from ..problems.beam import (
     SupportMotion,
 )
 from ..problems.beam.damping import size_kelvin_voigt
-from ..problems.beam.galerkin import GalerkinBeamProblem
+from ..problems.beam.formulations import beam_problem
 from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
@@ -90,7 +90,7 @@ KEYS = {
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
         Key("space.formulation", "str", "primal",
             "balance laws: the paper's primal collocation, the locking-free mixed one (resultant splines), or the "
-            "weak form (galerkin: energy-conserving, one member)",
+            "weak form (galerkin: energy-conserving by construction)",
             choices=("primal", "mixed", "galerkin")),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
@@ -482,16 +482,8 @@ def _undamped(scene: Scene) -> BeamProblem:
     kv = scene["material.kelvin_voigt"]
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key
     try:
-        if scene["space.formulation"] == "galerkin":
-            if hasattr(space, "patches"):
-                raise SceneError(f"{scene.source}: key 'space.formulation' = 'galerkin' takes one member "
-                                 f"({len(space.patches)} here, from [[beams]] or [[point_loads]]); use 'mixed' "
-                                 "or 'primal' for frames")
-            pb = GalerkinBeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
-                                     kelvin_voigt=0.0 if kv == "auto" else kv)
-        else:
-            pb = BeamProblem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
-                             kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
+        pb = beam_problem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
+                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return pb

@@ -9,7 +9,15 @@ import pytest
 from liegroup_int import integrate
 from liegroup_int.iga import CollocationSpace, straight
 from liegroup_int.iga.patches import PatchedSpace
-from liegroup_int.problems.beam import BeamProblem, BoundaryConditions, EndLoad, Loads, Profile, SectionConstants
+from liegroup_int.problems.beam import (
+    BeamProblem,
+    BoundaryConditions,
+    EndLoad,
+    Loads,
+    Profile,
+    SectionConstants,
+    beam_problem,
+)
 
 SECTION = SectionConstants(CN=(1e6, 1e6, 1e6), CM=(1e3, 1e3, 1e3), mu=1.0, Jm=(10.0, 10.0, 20.0))
 PULSE = Profile(kind="table", table=((0.0, 0.0), (1.0, 50.0), (2.0, 0.0)))
@@ -55,15 +63,16 @@ def test_backends_agree_on_a_loaded_kink(formulation, tau, sections):
 
 def _tips(space, formulation, dt, t_end=1.0):
     end = EndLoad(force=(0, 0, 0.5), couple=(2.0, 0, 1.0), force_profile=PULSE, couple_profile=PULSE)
-    pb = BeamProblem(space, SECTION, BoundaryConditions("clamped", "free"), Loads(end=end), formulation=formulation,
-                     backend="numba")
+    pb = beam_problem(space, SECTION, BoundaryConditions("clamped", "free"), Loads(end=end), formulation=formulation,
+                      backend="numba")
     tips = []
     integrate(pb, pb.initial_state(), (0.0, t_end), dt=dt, t_eval=np.linspace(0.0, t_end, 5),
               observer=lambda t, y: tips.append(y.c[-1].copy()))
     return np.array(tips)
 
 
-def test_straight_joint_converges_like_one_patch():
+@pytest.mark.parametrize("formulation", ["mixed", "galerkin"])
+def test_straight_joint_converges_like_one_patch(formulation):
     """Two collinear 10 m patches of n control points each against one 20 m patch of
     2n - 1 (the same spacing), both against one patch of 81: a 20 m cantilever (the
     right-angle frame's section) under a tip force and torsion-bending couple pulse, tip
@@ -71,13 +80,15 @@ def test_straight_joint_converges_like_one_patch():
     two patches 2.9e-4, 6.6e-6: the joint (a C^0 break instead of C^3 continuity) costs
     4.4x the error at n = 11, 1.3x at n = 21, and converges faster than one patch (log2
     of the error ratio 5.4; over 2 s, docs/verification.md section 7b)."""
-    ref = _tips(CollocationSpace(straight(20, (1, 0, 0), 4, 81)), "mixed", 1e-5)
+    ref = _tips(CollocationSpace(straight(20, (1, 0, 0), 4, 81)), formulation, 1e-5)
     err = {}
     for n in (11, 21):
-        one = _tips(CollocationSpace(straight(20, (1, 0, 0), 4, 2 * n - 1)), "mixed", 2e-5)
+        one = _tips(CollocationSpace(straight(20, (1, 0, 0), 4, 2 * n - 1)), formulation, 2e-5)
         two = _tips(PatchedSpace([CollocationSpace(straight(10, (1, 0, 0), 4, n)),
-                                  CollocationSpace(straight(10, (1, 0, 0), 4, n, origin=(10, 0, 0)))]), "mixed", 2e-5)
+                                  CollocationSpace(straight(10, (1, 0, 0), 4, n, origin=(10, 0, 0)))]), formulation,
+                    2e-5)
         err[n] = (np.abs(one - ref).max(), np.abs(two - ref).max())
+    print(formulation, err)
     for n in (11, 21):
         assert err[n][1] <= 6.0 * err[n][0], err
     assert np.log2(err[11][1] / err[21][1]) >= 3.0, err
@@ -109,7 +120,8 @@ def _stepped_euler_bernoulli(members, k):
     return np.array(roots[:k]) / (2 * np.pi)
 
 
-def test_stepped_cantilever_frequencies():
+@pytest.mark.parametrize("formulation", ["mixed", "galerkin"])
+def test_stepped_cantilever_frequencies(formulation):
     """Two collinear 5 m members with different sections (EI 1e3 and 250 N m^2, mu 1 and
     0.5 kg/m; stiff in shear and extension, negligible rotary inertia), one section per
     patch: the three lowest bending frequencies from the modal analysis against the
@@ -124,13 +136,14 @@ def test_stepped_cantilever_frequencies():
     ref = _stepped_euler_bernoulli([(1e3, 1.0, 5.0), (250.0, 0.5, 5.0)], 3)
     sp = PatchedSpace([CollocationSpace(straight(5, (1, 0, 0), 4, 11)),
                        CollocationSpace(straight(5, (1, 0, 0), 4, 11, origin=(5, 0, 0)))])
-    pb = BeamProblem(sp, (A, B), BoundaryConditions("clamped", "free"), formulation="mixed")
+    pb = beam_problem(sp, (A, B), BoundaryConditions("clamped", "free"), formulation=formulation)
     f = np.array([m.freq_hz for m in modal_analysis(pb, 0.0, pb.initial_state(), 6).modes])
     bending = 0.5 * (f[0::2] + f[1::2])  # isotropic sections: a pair per bending mode
+    print(formulation, bending / ref - 1)
     assert np.allclose(bending, ref, rtol=1e-3, atol=0), (bending, ref)
 
 
-@pytest.mark.parametrize("formulation", ["primal", "mixed"])
+@pytest.mark.parametrize("formulation", ["primal", "mixed", "galerkin"])
 @pytest.mark.parametrize("patches", [1, 2])
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
 def test_hanging_bar_at_rest_reaction_equals_weight(formulation, patches, backend):
@@ -151,8 +164,8 @@ def test_hanging_bar_at_rest_reaction_equals_weight(formulation, patches, backen
     else:
         sp = PatchedSpace([CollocationSpace(straight(L / 2, down, 4, 9)),
                            CollocationSpace(straight(L / 2, down, 4, 9, origin=(0, 0, -L / 2)))])
-    pb = BeamProblem(sp, sec, BoundaryConditions("clamped", "free"), Loads(gravity=(0.0, 0.0, -g)), backend=backend,
-                     formulation=formulation)
+    pb = beam_problem(sp, sec, BoundaryConditions("clamped", "free"), Loads(gravity=(0.0, 0.0, -g)), backend=backend,
+                      formulation=formulation)
     y = pb.initial_state()
     s = np.asarray(sp.s_c)
     z = -(s + rhoA * g * (L * s - 0.5 * s**2) / EA)  # integral of 1 + eps

@@ -13,11 +13,12 @@ from .model import (
     SectionConstants,
     SupportMotion,
 )
+from .formulations import beam_problem
 from .galerkin import GalerkinBeamProblem, GalerkinBeamState
 from .problem import BeamProblem, BeamState, quadrature_weights
 
 __all__ = [
-    "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
+    "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "beam_problem", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
     "BoundaryConditions", "SupportMotion", "InitialConditions", "curvature_update", "jr_times",
     "jr_theta_s_derivative", "strains", "quadrature_weights",
 ]

@@ -88,11 +88,13 @@ class GalerkinBeamProblem(Problem):
 
     Parameters
     ----------
-    space : CollocationSpace
-        Basis and reference geometry (one patch).
-    constants : SectionConstants
+    space : CollocationSpace or PatchedSpace
+        Basis and reference geometry; a :class:`~liegroup_int.iga.patches.PatchedSpace`
+        is a frame of members joined rigidly (docs/theory.md section 15c).
+    constants : SectionConstants or tuple of SectionConstants
+        One section, or one per patch.
     bcs, loads, initial
-        As :class:`~.problem.BeamProblem` (point loads at joints are not supported).
+        As :class:`~.problem.BeamProblem` (``loads.joints``: dead point loads at the joints).
     backend : {"numpy", "numba"}
     kelvin_voigt : float
         Retardation time [s] of the strain-rate damping, as :class:`~.problem.BeamProblem`.
@@ -110,10 +112,6 @@ class GalerkinBeamProblem(Problem):
                  kelvin_voigt: float = 0.0, integration: str = "reduced"):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
-        if not isinstance(constants, SectionConstants):
-            raise ValueError("constants: the Galerkin formulation takes one SectionConstants (one member)")
-        if loads.joints:
-            raise ValueError("loads.joints: point loads need joints; the Galerkin formulation takes one member")
         kelvin_voigt = float(kelvin_voigt)
         if not (np.isfinite(kelvin_voigt) and kelvin_voigt >= 0.0):
             raise ValueError(f"kelvin_voigt: expected a retardation time >= 0 [s], got {kelvin_voigt!r}")
@@ -128,40 +126,117 @@ class GalerkinBeamProblem(Problem):
         self.gs = GalerkinSpace(space, reduced=integration == "reduced")
         gs = self.gs
         self.n, self.m = gs.n, gs.m
-        self.CN = np.asarray(constants.CN, float)
-        self.CM = np.asarray(constants.CM, float)
-        self.mu = float(constants.mu)
-        self.Jm = np.asarray(constants.Jm, float)
+        sections = self._sections(space, constants)
+        pp = gs.point_patch
+        self.CN = np.array([sec.CN for sec in sections], dtype=float)[pp]
+        self.CM = np.array([sec.CM for sec in sections], dtype=float)[pp]
+        self.Jm = np.array([sec.Jm for sec in sections], dtype=float)[pp]
+        self.mu = np.array([sec.mu for sec in sections], dtype=float)[pp]
         self.B0, self.B1 = gs.B0, gs.B1
         self.wf, self.wa = gs.w_full, gs.w_axial
-        self.q = np.asarray(loads.distributed_force, float) + self.mu * np.asarray(loads.gravity, float)
-        self.has_q = bool(np.any(self.q))
+        g = np.asarray(loads.gravity, float)
+        self.has_q = bool(np.any(loads.distributed_force) or np.any(g))
+        q_pt = np.asarray(loads.distributed_force, float) + self.mu[:, None] * g
+        #: ``int N_i q ds`` (gravity included), ``(n, 3)``, times the distributed profile
+        self.load_vector = gs.B0.T @ (gs.w_full[:, None] * q_pt)
         self.m_dist = np.asarray(loads.distributed_couple, float)
         self.has_m = bool(np.any(self.m_dist))
-        self.load_weights = gs.B0.T @ gs.w_full  # int N_i ds, (n,)
+        #: ``int mu N_i ds``, ``(n,)``: the linear momentum is ``mass_weights @ v``
+        self.mass_weights = gs.B0.T @ (gs.w_full * self.mu)
         n, m = self.n, self.m
         self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
                      self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
         self.translating_ends = tuple(e for e in self.ends if e.translation is not None)
-        self.loaded_ends = tuple(e for e in self.ends if e.load.active)
-        self.joints = ()
+        self.joints = self._joints(space, loads)
+        #: ``(row, point, EndLoad)`` of every loaded end and joint
+        self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
+            (j[0], j[2], j[4]) for j in self.joints if j[4] is not None)
         fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
         for e in self.ends:
             fixp[e.index] |= e.fix_position
             fixr[e.index] |= e.fix_rotation
         self.fix_position, self.fix_rotation = fixp, fixr
-        self.mass_position = BandedSPD(gs.mass, fixp)
-        self.mass_rotation = BandedSPD(gs.mass, fixr)
+        self._M_mu = gs.weighted_mass(self.mu)
+        self._M_J = tuple(gs.weighted_mass(self.Jm[:, d]) for d in range(3))
+        self.mass_position = BandedSPD(self._M_mu, fixp)
+        self.mass_theta = BandedSPD(gs.mass, fixr)
+        self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
+        self._constraints = {
+            "position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
+            "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
+            "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True),
+        } if self.joints else {}
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
-                                   or self.translating_ends or self.loaded_ends)
+                                   or self.translating_ends or self.point_loads)
         self._nb_kernels = None
         if backend == "numba":
             import importlib.util
 
             if importlib.util.find_spec("numba") is None:  # pragma: no cover - depends on the environment
                 raise ImportError("backend='numba' needs numba (pip install numba); use backend='numpy'")
+
+    @staticmethod
+    def _sections(space, constants) -> tuple:
+        """One :class:`SectionConstants` per patch."""
+        patches = getattr(space, "patches", (space,))
+        if isinstance(constants, SectionConstants):
+            return (constants,) * len(patches)
+        sections = tuple(constants)
+        if len(sections) != len(patches) or not all(isinstance(c, SectionConstants) for c in sections):
+            raise ValueError(f"constants: one SectionConstants, or one per patch ({len(patches)} patch(es), "
+                             f"got {len(sections)})")
+        return sections
+
+    def _joints(self, space, loads) -> tuple:
+        """``(a, b, point_a, Q, load)`` of each rigid joint: the control rows of the two
+        patch ends, the point at the end of patch ``a``, the relative reference rotation
+        ``Q = R0_a^T R0_b`` there and the point load (or None)."""
+        rows = getattr(space, "joints", ())
+        if loads.joints and len(loads.joints) != len(rows):
+            raise ValueError(f"loads.joints: {len(loads.joints)} joint load(s) for {len(rows)} joint(s)")
+        out = []
+        for k, (a, b) in enumerate(rows):
+            ld = loads.joints[k] if loads.joints else None
+            if ld is not None and ld.follower:
+                raise ValueError(f"loads.joints[{k}]: a joint load is a dead load (follower = false)")
+            pa, pb = self.gs.patch_ends[k][1], self.gs.patch_ends[k + 1][0]
+            Q = self.gs.R0[pa].T @ self.gs.R0[pb]
+            out.append((a, b, pa, Q, ld if ld is not None and ld.active else None))
+        return tuple(out)
+
+    def _joint_residual(self, x: np.ndarray, rotational: bool) -> np.ndarray:
+        """``C x``: ``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint, ``(3 J,)``."""
+        return np.concatenate([x[b] - (Q.T @ x[a] if rotational else x[a]) for a, b, _, Q, _ in self.joints])
+
+    def _constraint(self, solve, rotational: bool):
+        """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field: the columns
+        ``Y = M^-1 C^T`` ``(3 J, n, 3)`` and the inverse of ``S = C M^-1 C^T``."""
+        k = 3 * len(self.joints)
+        Y = np.zeros((k, self.n, 3))
+        for j, (a, b, _, Q, _) in enumerate(self.joints):
+            for e in range(3):
+                r = np.zeros((self.n, 3))
+                r[b, e] = 1.0
+                r[a] -= Q[:, e] if rotational else np.eye(3)[:, e]
+                Y[3 * j + e] = solve(r)
+        S = np.array([self._joint_residual(y, rotational) for y in Y]).T
+        return Y, np.linalg.inv(S)
+
+    def _constrain(self, x: np.ndarray, field: str) -> np.ndarray:
+        """The solution ``x`` of ``M x = f`` corrected by the joints' multipliers:
+        ``x - Y S^-1 C x`` (rigid joints, no work)."""
+        if not self.joints:
+            return x
+        Y, Sinv = self._constraints[field]
+        lam = Sinv @ self._joint_residual(x, field != "position")
+        return x - np.tensordot(lam, Y, axes=1)
+
+    def _solve_rotation(self, T: np.ndarray, fixed) -> np.ndarray:
+        """``W'`` from ``(J M) W' = T`` component by component, ``(n, 3)``."""
+        fixed = np.broadcast_to(np.asarray(fixed, float), (int(np.sum(self.fix_rotation)), 3))
+        return np.stack([self.mass_rotation[d].solve(T[:, d], fixed[:, d]) for d in range(3)], axis=1)
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
@@ -197,13 +272,19 @@ class GalerkinBeamProblem(Problem):
     def initial_state(self) -> GalerkinBeamState:
         """Reference configuration with the initial velocity field."""
         sp, gs = self.space, self.gs
-        c = np.array(sp.curve.control_points, dtype=float)
+        c = np.array(sp.control_points if hasattr(sp, "patches") else sp.curve.control_points, dtype=float)
         ic = self.initial
         omega = np.asarray(ic.omega, float)
         v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
                                                      sp.c0 - np.asarray(ic.axis_point, float))
         v = sp.solve(v_c)  # a rigid velocity field lies in the (rational) trial space
-        w = gs.project(rot_T(gs.R0, np.broadcast_to(omega, (self.m, 3)))) if np.any(omega) else np.zeros((self.n, 3))
+        w = np.zeros((self.n, 3))
+        if np.any(omega):  # material Omega = R0^T omega, projected; exact at the patch ends
+            w = gs.project(rot_T(gs.R0, np.broadcast_to(omega, (self.m, 3))))
+            ends = [(0, 0)] + [(j[0], j[2]) for j in self.joints] + [(j[1], gs.patch_ends[k + 1][0])
+                                                                      for k, j in enumerate(self.joints)]
+            for row, pt in ends + [(self.n - 1, self.m - 1)]:
+                w[row] = gs.R0[pt].T @ omega
         R = np.array(gs.R0)
         for e in self.ends:
             if e.fix_position and np.any(v[e.index]):
@@ -226,7 +307,22 @@ class GalerkinBeamProblem(Problem):
     def zero_increment(self, y) -> np.ndarray:
         return np.zeros((4, self.n, 3))
 
+    def project_increment(self, u: np.ndarray) -> np.ndarray:
+        """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
+        and velocity, ``Q^T u_a`` for Theta and W): the increments that keep the members
+        rigidly joined. The stage rates satisfy this already; a perturbation that breaks a
+        joint (a finite-difference Jacobian's) then moves nothing, so the spectrum gets
+        exact zeros for those directions instead of noise."""
+        if not self.joints:
+            return u
+        u = np.array(u, dtype=float, copy=True)
+        for a, b, _, Q, _ in self.joints:
+            u[[0, 2], b] = u[[0, 2], a]
+            u[[1, 3], b] = u[[1, 3], a] @ Q
+        return u
+
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
+        u = self.project_increment(u)
         if self._nb is not None:
             return self._nb.action(u, y)
         th, th_s = self.B0 @ u[1], self.B1 @ u[1]
@@ -248,7 +344,7 @@ class GalerkinBeamProblem(Problem):
     def _project_rotation(self, values: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """``M^-1 int N values`` with the clamped rows set to ``ends`` rows."""
         rhs = self.B0.T @ (self.wf[:, None] * values)
-        return self.mass_rotation.solve(rhs, ends[self.fix_rotation])
+        return self._constrain(self.mass_theta.solve(rhs, ends[self.fix_rotation]), "theta")
 
     def vector_field(self, t: float, y: GalerkinBeamState) -> np.ndarray:
         return self.increment_rate(t, y, np.zeros((4, self.n, 3)))
@@ -262,8 +358,8 @@ class GalerkinBeamProblem(Problem):
         # Theta' = dexpinv_{-Theta}(Omega), projected; at a clamp Theta' = W (parallel)
         out[1] = self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w)
         F, T = self._forces(t, y, Om)
-        out[2] = self.mass_position.solve(F / self.mu, self._prescribed_acceleration(t, "position"))
-        out[3] = self.mass_rotation.solve(T / self.Jm, self._prescribed_acceleration(t, "rotation"))
+        out[2] = self._constrain(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")), "position")
+        out[3] = self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
         return out
 
     def _prescribed_acceleration(self, t: float, which: str) -> np.ndarray:
@@ -309,13 +405,13 @@ class GalerkinBeamProblem(Problem):
             pt = pt + f * wf * rot_T(R, np.broadcast_to(self.m_dist, Om.shape))
         T = self.B0.T @ pt - self.B1.T @ (wf * M)
         if self.has_q:
-            F += f * self.load_weights[:, None] * self.q
-        for e in self.loaded_ends:
-            ld, Re = e.load, R[e.point]
+            F += f * self.load_vector
+        for row, point, ld in self.point_loads:
+            Re = R[point]
             if np.any(ld.force):
-                F[e.index] += self._end_force(ld, t, Re)
+                F[row] += self._end_force(ld, t, Re)
             if np.any(ld.couple):
-                T[e.index] += Re.T @ self._end_couple(ld, t, Re)
+                T[row] += Re.T @ self._end_couple(ld, t, Re)
         return F, T
 
     @staticmethod
@@ -349,12 +445,13 @@ class GalerkinBeamProblem(Problem):
         k = self.increment_rate(t, y, np.zeros((4, self.n, 3))) if self._nb is None else \
             self._nb.increment_rate(t, y, np.zeros((4, self.n, 3)))
         F, T = self._forces(t, y, self.B0 @ y.w)
-        M = self.gs.mass
         out = {}
         for e in self.ends:
             if e.fix_position or e.fix_rotation:
-                f = self.mu * (M[e.index] @ k[2]) - F[e.index] if e.fix_position else np.zeros(3)
-                c = self.Jm * (M[e.index] @ k[3]) - T[e.index] if e.fix_rotation else np.zeros(3)
+                i = e.index
+                f = self._M_mu[i] @ k[2] - F[i] if e.fix_position else np.zeros(3)
+                c = np.array([self._M_J[d][i] @ k[3][:, d] for d in range(3)]) - T[i] if e.fix_rotation \
+                    else np.zeros(3)
                 out[e.name] = (f, c)
         return out
 
@@ -370,7 +467,7 @@ class GalerkinBeamProblem(Problem):
         if self.has_q or self.has_m:
             f = self.loads.distributed_profile(t)
             if self.has_q:
-                p += f * float(self.q @ (self.load_weights @ y.v))
+                p += f * float(np.sum(self.load_vector * y.v))
             if self.has_m:
                 p += f * float(np.sum(self.wf[:, None] * rot_T(y.R, np.broadcast_to(self.m_dist, Om.shape)) * Om))
         if self.moving_ends or self.translating_ends:
@@ -379,12 +476,12 @@ class GalerkinBeamProblem(Problem):
                 p += float(sup[e.name][1] @ y.w[e.index])
             for e in self.translating_ends:
                 p += float(sup[e.name][0] @ y.v[e.index])
-        for e in self.loaded_ends:
-            ld, Re = e.load, y.R[e.point]
+        for row, point, ld in self.point_loads:
+            Re = y.R[point]
             if np.any(ld.force):
-                p += float(self._end_force(ld, t, Re) @ y.v[e.index])
+                p += float(self._end_force(ld, t, Re) @ y.v[row])
             if np.any(ld.couple):
-                p += float((Re.T @ self._end_couple(ld, t, Re)) @ y.w[e.index])
+                p += float((Re.T @ self._end_couple(ld, t, Re)) @ y.w[row])
         return p
 
     # ------------------------------------------------------------------ diagnostics
@@ -393,18 +490,17 @@ class GalerkinBeamProblem(Problem):
 
     def energy_parts(self, y, t: float = 0.0) -> dict[str, float]:
         """Kinetic (consistent mass), strain and load-potential energy [J]."""
-        M = self.gs.mass
-        kin = 0.5 * (self.mu * float(np.sum(y.v * (M @ y.v))) + float(np.sum(self.Jm * y.w * (M @ y.w))))
+        kin = 0.5 * (float(np.sum(y.v * (self._M_mu @ y.v)))
+                     + sum(float(y.w[:, d] @ (self._M_J[d] @ y.w[:, d])) for d in range(3)))
         Gt, N, Mm = self._resultants_elastic(y)
         strain = 0.5 * (float(self.wa @ np.sum(N * (Gt - self.gs.gamma0), axis=1))
                         + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1)))
         potential = 0.0
         if self.has_q:
-            potential -= self.loads.distributed_profile(t) * float(self.q @ (self.load_weights @ y.c))
-        for e in self.loaded_ends:
-            ld = e.load
+            potential -= self.loads.distributed_profile(t) * float(np.sum(self.load_vector * y.c))
+        for row, _, ld in self.point_loads:
             if np.any(ld.force) and ld.force_profile.is_constant and not ld.follower:
-                potential -= float(np.dot(ld.force, y.c[e.index]))
+                potential -= float(np.dot(ld.force, y.c[row]))
         return {"kinetic": kin, "strain": strain, "potential": potential}
 
     def _resultants_elastic(self, y):
@@ -423,8 +519,8 @@ class GalerkinBeamProblem(Problem):
         """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
         c, v, Om = self.B0 @ y.c, self.B0 @ y.v, self.B0 @ y.w
         wf = self.wf[:, None]
-        h = cross(c, self.mu * v) + rot(y.R, self.Jm * Om)
-        return self.mu * (self.load_weights @ y.v), np.sum(wf * h, axis=0)
+        h = cross(c, self.mu[:, None] * v) + rot(y.R, self.Jm * Om)
+        return self.mass_weights @ y.v, np.sum(wf * h, axis=0)
 
     def orth_error(self, y) -> float:
         E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)

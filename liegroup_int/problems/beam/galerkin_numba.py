@@ -14,12 +14,17 @@ The SO(3) coefficients share the branches and series tables of :mod:`.kernels_nu
 
 Data (one tuple ``g``, built by :class:`NumbaGalerkinKernels`)::
 
-    ints (n, m, end rows ...), flt (section, tau, threshold, flags), B0, B1 (m, p + 1),
-    j0 (m,), wf, wa (m,), gam0, K0 (m, 3), lw (n,), Up, Ur (p + 1, n) Cholesky factors,
-    Cp, Cr (n, k) mass columns of the supported rows, fp, fr (k,) those rows, ser, lf
+    ints (n, m, ends), flt (tau, threshold, flags), B0, B1 (m, p + 1), j0 (m,), wf, wa (m,),
+    gam0, K0 (m, 3), sec (m, 9) section per point (C_N, C_M, J), lv (n, 3) distributed load,
+    U (5, p + 1, n) Cholesky factors (mu M; M; J_1 M, J_2 M, J_3 M), Cp (n, kp), Cth (n, kr),
+    Crot (3, n, kr) mass columns of the supported rows fp (kp,), fr (kr,), ser, lf, keep,
+    lpt (nl, 5) loaded points, jab (J, 2), jq (J, 3, 3), Y (3, 3 J, n, 3), S (3, 3 J, 3 J)
+    joint constraints of the position, Theta and W fields, jr (2, 3 J) work
 
 ``lf`` holds the loads at the stage time (:func:`~.kernels_numba._set_loads` writes
-``vector * profile(t)`` into its slots, :data:`SLOTS`).
+``vector * profile(t)`` into its slots: the distributed load's profile (first entry), the
+distributed couple, the supports' prescribed accelerations, then a force and a couple per
+loaded point).
 """
 
 from __future__ import annotations
@@ -36,17 +41,16 @@ from .kernels_numba import _SERIES_KEYS, _coef_ABC, _coef_D, _cross, _set_loads,
 
 _FM = {"contract"}
 
-# ---- ints: n, m, then per end (2): index, point, force on, couple on, follower, prescribed
-# rotation, prescribed displacement
-_I_N, _I_M, _I_END, _NEI = 0, 1, 2, 7
-# ---- flt: CN (3), CM (3), Jm (3), mu, tau, threshold, has_q, has_m, power
-_F_CN, _F_CM, _F_JM, _F_MU, _F_TAU, _F_THR, _F_HASQ, _F_HASM, _F_POW, _NF = 0, 3, 6, 9, 10, 11, 12, 13, 14, 15
-#: Slots of ``lf`` (3 floats each): distributed force (gravity included), distributed
-#: couple, then per end: force, couple, prescribed acceleration, prescribed angular
-#: acceleration (material).
-SLOTS = {"q": 0, "m": 3, "force0": 6, "couple0": 9, "acc0": 12, "alpha0": 15,
-         "force1": 18, "couple1": 21, "acc1": 24, "alpha1": 27}
-_NLF = 30
+# ---- ints: n, m, then per end (2): index, point, prescribed rotation, prescribed displacement
+_I_N, _I_M, _I_END, _NEI = 0, 1, 2, 4
+# ---- flt: tau, threshold, has_q, has_m, power
+_F_TAU, _F_THR, _F_HASQ, _F_HASM, _F_POW, _NF = 0, 1, 2, 3, 4, 5
+#: Slots of ``lf`` (3 floats each): the distributed load's profile (first entry), the
+#: distributed couple, per end: prescribed acceleration, prescribed angular acceleration
+#: (material); then a force and a couple per loaded point (:data:`_LF_POINTS` + 6 k).
+SLOTS = {"q": 0, "m": 3, "acc0": 6, "alpha0": 9, "acc1": 12, "alpha1": 15}
+_LF_POINTS = 18
+SLOT_ACC, SLOT_ALPHA = SLOTS["acc0"], SLOTS["alpha0"]
 
 
 @njit(cache=True, fastmath=False)
@@ -74,19 +78,42 @@ def _chol_solve(U, b, col0, ncol):
 
 
 @njit(cache=True, fastmath=False)
-def _prescribe(b, C, rows, vals, col0):
-    """Move the prescribed values ``vals`` (k, 3) of ``rows`` to the right-hand side:
-    ``b -= C vals`` on columns ``col0:col0+3``, then ``b[rows] = vals``."""
+def _prescribe(b, C, rows, vals, d):
+    """Move the prescribed values ``vals[:, d]`` of ``rows`` to the right-hand side of
+    column ``d``: ``b[:, d] -= C vals[:, d]``, then ``b[rows, d] = vals[:, d]``."""
     n = b.shape[0]
     for k in range(rows.shape[0]):
-        for d in range(3):
-            x = vals[k, d]
-            if x != 0.0:
-                for j in range(n):
-                    b[j, col0 + d] -= C[j, k] * x
+        x = vals[k, d]
+        if x != 0.0:
+            for j in range(n):
+                b[j, d] -= C[j, k] * x
     for k in range(rows.shape[0]):
-        for d in range(3):
-            b[rows[k], col0 + d] = vals[k, d]
+        b[rows[k], d] = vals[k, d]
+
+
+@njit(cache=True, fastmath=False)
+def _constrain(x, jab, jq, Y, Sinv, rotational, r):
+    """``x <- x - Y S^-1 C x`` (rigid joints: ``x[b] = Q^T x[a]``, or ``x[b] = x[a]``)."""
+    nj = jab.shape[0]
+    if nj == 0:
+        return
+    for j in range(nj):
+        a, b = jab[j, 0], jab[j, 1]
+        for e in range(3):
+            if rotational:
+                r[3 * j + e] = x[b, e] - (jq[j, 0, e] * x[a, 0] + jq[j, 1, e] * x[a, 1] + jq[j, 2, e] * x[a, 2])
+            else:
+                r[3 * j + e] = x[b, e] - x[a, e]
+    k = 3 * nj
+    n = x.shape[0]
+    for l in range(k):
+        lam = 0.0
+        for q in range(k):
+            lam += Sinv[l, q] * r[q]
+        if lam != 0.0:
+            for i in range(n):
+                for d in range(3):
+                    x[i, d] -= lam * Y[l, i, d]
 
 
 @njit(cache=True, fastmath=_FM)
@@ -142,12 +169,10 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
     """Stage rate ``(4, n, 3)`` into ``out`` (the loads already in ``g``'s ``lf`` at the
     stage time); the power of the loads and supports minus the dissipation into ``pw[0]``
     when the problem computes it."""
-    ints, flt, B0, B1, j0, wf, wa, gam0, K0, lw, Up, Ur, Cp, Cr, fp, fr, ser, lf, keep = g
+    (ints, flt, B0, B1, j0, wf, wa, gam0, K0, sec, lv, U, Cp, Cth, Crot, fp, fr, ser, lf, keep, lpt,
+     jab, jq, Y, Sinv, jr) = g
     n, m, W = c.shape[0], B0.shape[0], B0.shape[1]
-    CN0, CN1, CN2 = flt[_F_CN], flt[_F_CN + 1], flt[_F_CN + 2]
-    CM0, CM1, CM2 = flt[_F_CM], flt[_F_CM + 1], flt[_F_CM + 2]
-    J0, J1, J2 = flt[_F_JM], flt[_F_JM + 1], flt[_F_JM + 2]
-    mu, tau, thr = flt[_F_MU], flt[_F_TAU], flt[_F_THR]
+    tau, thr = flt[_F_TAU], flt[_F_THR]
     has_m = flt[_F_HASM] != 0.0
     want_power = flt[_F_POW] != 0.0
     md0, md1, md2 = lf[3], lf[4], lf[5]
@@ -163,6 +188,8 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
         if wfi == 0.0 and wai == 0.0:
             continue
         js = j0[i]
+        CN0, CN1, CN2, CM0, CM1, CM2 = sec[i, 0], sec[i, 1], sec[i, 2], sec[i, 3], sec[i, 4], sec[i, 5]
+        J0, J1, J2 = sec[i, 6], sec[i, 7], sec[i, 8]
         t0 = t1 = t2 = o0 = o1 = o2 = os0 = os1 = os2 = cs0 = cs1 = cs2 = vs0 = vs1 = vs2 = 0.0
         for k in range(W):
             j = js + k
@@ -259,23 +286,21 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
             out[3, j, 0] += b0 * p0 - b1 * M0
             out[3, j, 1] += b0 * p1 - b1 * M1
             out[3, j, 2] += b0 * p2 - b1 * M2
-    # distributed force
+    # distributed force (profile in lf[0])
     if flt[_F_HASQ] != 0.0:
-        q0, q1, q2 = lf[0], lf[1], lf[2]
+        fq = lf[0]
         for j in range(n):
-            out[2, j, 0] += lw[j] * q0
-            out[2, j, 1] += lw[j] * q1
-            out[2, j, 2] += lw[j] * q2
-            if want_power:
-                power += lw[j] * (q0 * v[j, 0] + q1 * v[j, 1] + q2 * v[j, 2])
-    # end loads
-    for e in range(2):
-        row = _I_END + _NEI * e
-        idx, pt = ints[row], ints[row + 1]
-        fo = 6 + 12 * e
-        if ints[row + 2] != 0:  # force (spatial; follower: R_end f)
+            for d in range(3):
+                out[2, j, d] += fq * lv[j, d]
+                if want_power:
+                    power += fq * lv[j, d] * v[j, d]
+    # point loads at ends and joints
+    for l in range(lpt.shape[0]):
+        idx, pt = lpt[l, 0], lpt[l, 1]
+        fo = _LF_POINTS + 6 * l
+        if lpt[l, 2] != 0:  # force (spatial; follower: R_end f)
             f0, f1, f2 = lf[fo], lf[fo + 1], lf[fo + 2]
-            if ints[row + 4] != 0:
+            if lpt[l, 4] != 0:
                 f0, f1, f2 = (R[pt, 0, 0] * f0 + R[pt, 0, 1] * f1 + R[pt, 0, 2] * f2,
                               R[pt, 1, 0] * f0 + R[pt, 1, 1] * f1 + R[pt, 1, 2] * f2,
                               R[pt, 2, 0] * f0 + R[pt, 2, 1] * f1 + R[pt, 2, 2] * f2)
@@ -284,9 +309,9 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
             out[2, idx, 2] += f2
             if want_power:
                 power += f0 * v[idx, 0] + f1 * v[idx, 1] + f2 * v[idx, 2]
-        if ints[row + 3] != 0:  # couple (material: R_end^T C; follower: C)
+        if lpt[l, 3] != 0:  # couple (material: R_end^T C; follower: C)
             f0, f1, f2 = lf[fo + 3], lf[fo + 4], lf[fo + 5]
-            if ints[row + 4] == 0:
+            if lpt[l, 4] == 0:
                 f0, f1, f2 = (R[pt, 0, 0] * f0 + R[pt, 1, 0] * f1 + R[pt, 2, 0] * f2,
                               R[pt, 0, 1] * f0 + R[pt, 1, 1] * f1 + R[pt, 2, 1] * f2,
                               R[pt, 0, 2] * f0 + R[pt, 1, 2] * f1 + R[pt, 2, 2] * f2)
@@ -302,53 +327,52 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
     for k in range(fr.shape[0]):
         for d in range(3):
             keep[2 + k, d] = out[3, fr[k], d]
-    for j in range(n):
-        out[2, j, 0] /= mu
-        out[2, j, 1] /= mu
-        out[2, j, 2] /= mu
-        out[3, j, 0] /= J0
-        out[3, j, 1] /= J1
-        out[3, j, 2] /= J2
     # prescribed rows: Theta' = W (parallel), accelerations from lf
     for k in range(fr.shape[0]):
         e = 0 if fr[k] == 0 else 1
         for d in range(3):
             keep[4 + k, d] = w[fr[k], d]
-            keep[6 + k, d] = lf[15 + 12 * e + d]
+            keep[6 + k, d] = lf[SLOT_ALPHA + 6 * e + d]
     for k in range(fp.shape[0]):
         e = 0 if fp[k] == 0 else 1
         for d in range(3):
-            keep[8 + k, d] = lf[12 + 12 * e + d]
+            keep[8 + k, d] = lf[SLOT_ACC + 6 * e + d]
+    kr, kp = fr.shape[0], fp.shape[0]
     b = out[1]
-    _prescribe(b, Cr, fr, keep[4:4 + fr.shape[0]], 0)
-    _chol_solve(Ur, b, 0, 3)
+    for d in range(3):
+        _prescribe(b, Cth, fr, keep[4:4 + kr], d)
+    _chol_solve(U[1], b, 0, 3)
+    _constrain(b, jab, jq, Y[1], Sinv[1], True, jr)
     b = out[3]
-    _prescribe(b, Cr, fr, keep[6:6 + fr.shape[0]], 0)
-    _chol_solve(Ur, b, 0, 3)
+    for d in range(3):
+        _prescribe(b, Crot[d], fr, keep[6:6 + kr], d)
+        _chol_solve(U[2 + d], b, d, 1)
+    _constrain(b, jab, jq, Y[2], Sinv[2], True, jr)
     b = out[2]
-    _prescribe(b, Cp, fp, keep[8:8 + fp.shape[0]], 0)
-    _chol_solve(Up, b, 0, 3)
+    for d in range(3):
+        _prescribe(b, Cp, fp, keep[8:8 + kp], d)
+    _chol_solve(U[0], b, 0, 3)
+    _constrain(b, jab, jq, Y[0], Sinv[0], False, jr)
     if want_power:  # moving supports: reaction . velocity
         for e in range(2):
             row = _I_END + _NEI * e
             idx = ints[row]
-            if ints[row + 6] != 0:
-                for k in range(fp.shape[0]):
+            if ints[row + 3] != 0:
+                for k in range(kp):
                     if fp[k] == idx:
                         for d in range(3):
                             s = 0.0
                             for j in range(n):
                                 s += Cp[j, k] * out[2, j, d]
-                            power += (mu * s - keep[k, d]) * v[idx, d]
-            if ints[row + 5] != 0:
-                Jd = (J0, J1, J2)
-                for k in range(fr.shape[0]):
+                            power += (s - keep[k, d]) * v[idx, d]
+            if ints[row + 2] != 0:
+                for k in range(kr):
                     if fr[k] == idx:
                         for d in range(3):
                             s = 0.0
                             for j in range(n):
-                                s += Cr[j, k] * out[3, j, d]
-                            power += (Jd[d] * s - keep[2 + k, d]) * w[idx, d]
+                                s += Crot[d, j, k] * out[3, j, d]
+                            power += (s - keep[2 + k, d]) * w[idx, d]
         pw[0] = power
 
 
@@ -375,7 +399,7 @@ def galerkin_angle(u, B0, j0):
 @njit(cache=True, fastmath=False, inline="always")
 def engine_rate(data, t, y, u, out):
     g, lpos, lvec, lprof, pw = data
-    _set_loads(g[17], lpos, lvec, lprof, t)
+    _set_loads(g[18], lpos, lvec, lprof, t)
     c, v, w, R, K = y
     galerkin_rates(c, v, w, R, K, u, out, g, pw)
     return pw[0]
@@ -386,7 +410,7 @@ def engine_action(data, u, y0, y1):
     g = data[0]
     c0, v0, w0, R0, K0 = y0
     c1, v1, w1, R1, K1 = y1
-    galerkin_action(u, c0, v0, w0, R0, K0, c1, v1, w1, R1, K1, g[2], g[3], g[4], g[16], g[1][_F_THR])
+    galerkin_action(u, c0, v0, w0, R0, K0, c1, v1, w1, R1, K1, g[2], g[3], g[4], g[17], g[1][_F_THR])
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -442,18 +466,22 @@ ENGINE_KERNELS = EngineKernels("beam_galerkin", engine_rate, engine_action, engi
 
 
 # ====================================================================== Python side
-def _windows(B: np.ndarray, width: int):
-    """Row windows ``(m, width)`` and their first columns ``(m,)`` of a basis matrix whose
-    rows have at most ``width`` consecutive non-zeros (kept inside ``[0, n)``)."""
-    m, n = B.shape
+def _windows(mats, width: int):
+    """Row windows ``(m, width)`` of each matrix and their common first columns ``(m,)``,
+    for basis matrices whose rows have at most ``width`` consecutive non-zeros together
+    (kept inside ``[0, n)``)."""
+    nz_all = np.zeros(mats[0].shape, dtype=bool)
+    for B in mats:
+        nz_all |= B != 0.0
+    m, n = nz_all.shape
     j0 = np.zeros(m, dtype=np.int64)
     for i in range(m):
-        nz = np.flatnonzero(B[i])
+        nz = np.flatnonzero(nz_all[i])
         j0[i] = min(int(nz[0]) if nz.size else 0, n - width)
         if nz.size and nz[-1] >= j0[i] + width:  # pragma: no cover - B-spline supports are p + 1 wide
             raise ValueError("basis row wider than its window")
     idx = j0[:, None] + np.arange(width)[None, :]
-    return np.ascontiguousarray(np.take_along_axis(B, idx, axis=1)), j0
+    return [np.ascontiguousarray(np.take_along_axis(B, idx, axis=1)) for B in mats], j0
 
 
 def _c(a):
@@ -465,59 +493,66 @@ class NumbaGalerkinKernels:
     :class:`~.galerkin.GalerkinBeamProblem`."""
 
     def __init__(self, pb):
+        from .model import Profile
+
         self.pb = pb
         gs = pb.gs
         n, m = pb.n, pb.m
         self.n = n
         width = pb.space.degree + 1
-        B0, j0 = _windows(np.asarray(gs.B0, float), width)
-        B1, j1 = _windows(np.asarray(gs.B1, float), width)
-        if not np.array_equal(j0, j1):  # pragma: no cover - same supports
-            raise ValueError("basis and derivative windows differ")
+        (B0, B1), j0 = _windows([np.asarray(gs.B0, float), np.asarray(gs.B1, float)], width)
         ints = np.zeros(_I_END + 2 * _NEI, dtype=np.int64)
         ints[_I_N], ints[_I_M] = n, m
         lvec, lprof, lpos = [], [], []
 
-        def slot(name, vec, prof):
-            lpos.append(SLOTS[name])
+        def slot(pos, vec, prof):
+            lpos.append(pos)
             lvec.append(np.asarray(vec, float))
             lprof.append(prof)
 
-        from .model import Profile
-
         const = Profile()
         dprof = pb.loads.distributed_profile
-        slot("q", pb.q, dprof)
-        slot("m", pb.m_dist, dprof)
+        slot(SLOTS["q"], (1.0, 0.0, 0.0), dprof)
+        slot(SLOTS["m"], pb.m_dist, dprof)
         for e_i, e in enumerate(pb.ends):
             row = _I_END + _NEI * e_i
-            ld = e.load
             ints[row], ints[row + 1] = e.index, e.point
-            ints[row + 2] = int(bool(np.any(ld.force)))
-            ints[row + 3] = int(bool(np.any(ld.couple)))
-            ints[row + 4] = int(bool(ld.follower))
-            ints[row + 5] = int(e.motion is not None)
-            ints[row + 6] = int(e.translation is not None)
-            slot(f"force{e_i}", ld.force, ld.force_profile)
-            slot(f"couple{e_i}", ld.couple, ld.couple_profile)
+            ints[row + 2] = int(e.motion is not None)
+            ints[row + 3] = int(e.translation is not None)
             if e.translation is not None:
                 scale, prof = e.translation.acceleration_profile()
-                slot(f"acc{e_i}", scale * e.translation.unit_axis, prof)
+                slot(SLOTS[f"acc{e_i}"], scale * e.translation.unit_axis, prof)
             else:
-                slot(f"acc{e_i}", np.zeros(3), const)
+                slot(SLOTS[f"acc{e_i}"], np.zeros(3), const)
             if e.motion is not None:
                 scale, prof = e.motion.acceleration_profile()
-                slot(f"alpha{e_i}", scale * (gs.R0[e.point].T @ e.motion.unit_axis), prof)
+                slot(SLOTS[f"alpha{e_i}"], scale * (gs.R0[e.point].T @ e.motion.unit_axis), prof)
             else:
-                slot(f"alpha{e_i}", np.zeros(3), const)
+                slot(SLOTS[f"alpha{e_i}"], np.zeros(3), const)
+        lpt = np.zeros((len(pb.point_loads), 5), dtype=np.int64)
+        for k, (row, point, ld) in enumerate(pb.point_loads):
+            lpt[k] = (row, point, int(bool(np.any(ld.force))), int(bool(np.any(ld.couple))), int(bool(ld.follower)))
+            slot(_LF_POINTS + 6 * k, ld.force, ld.force_profile)
+            slot(_LF_POINTS + 6 * k + 3, ld.couple, ld.couple_profile)
         flt = np.zeros(_NF)
-        flt[_F_CN:_F_CN + 3], flt[_F_CM:_F_CM + 3], flt[_F_JM:_F_JM + 3] = pb.CN, pb.CM, pb.Jm
-        flt[_F_MU], flt[_F_TAU], flt[_F_THR] = pb.mu, pb.tau, float(TAYLOR_THRESHOLD)
+        flt[_F_TAU], flt[_F_THR] = pb.tau, float(TAYLOR_THRESHOLD)
         flt[_F_HASQ], flt[_F_HASM], flt[_F_POW] = float(pb.has_q), float(pb.has_m), float(pb.has_quadrature)
         ser = np.array([[float(x) for x in TAYLOR[k]] for k in _SERIES_KEYS])
-        mp, mr = pb.mass_position, pb.mass_rotation
-        fp = np.flatnonzero(mp.fixed).astype(np.int64)
-        fr = np.flatnonzero(mr.fixed).astype(np.int64)
+        masses = (pb.mass_position, pb.mass_theta) + tuple(pb.mass_rotation)
+        U = np.array([mm.factor for mm in masses])
+        fp = np.flatnonzero(pb.mass_position.fixed).astype(np.int64)
+        fr = np.flatnonzero(pb.mass_theta.fixed).astype(np.int64)
+        Crot = np.array([mm.coupling for mm in pb.mass_rotation]).reshape(3, n, fr.size)
+        sec = np.concatenate([pb.CN, pb.CM, pb.Jm], axis=1)
+        nj = len(pb.joints)
+        jab = np.array([(j[0], j[1]) for j in pb.joints], dtype=np.int64).reshape(nj, 2)
+        jq = np.array([j[3] for j in pb.joints], dtype=float).reshape(nj, 3, 3)
+        if nj:
+            cons = [pb._constraints[k] for k in ("position", "theta", "rotation")]
+            Y = np.array([c[0] for c in cons])
+            Sinv = np.array([c[1] for c in cons])
+        else:
+            Y, Sinv = np.zeros((3, 0, n, 3)), np.zeros((3, 0, 0))
         self._rows = [profile_row(p) for p in lprof]
         self._lprof_objs = lprof
         widthp = max((r.size for r in self._rows if r is not None), default=1)
@@ -529,10 +564,10 @@ class NumbaGalerkinKernels:
         self.lvec = np.array(lvec, dtype=float).reshape(-1, 3)
         self.lprof = lp
         self.compilable = all(r is not None for r in self._rows)
-        lf = np.zeros(_NLF)
-        self.g = (ints, flt, B0, B1, j0, _c(gs.w_full), _c(gs.w_axial), _c(gs.gamma0), _c(gs.K0),
-                  _c(pb.load_weights), _c(mp.factor), _c(mr.factor), _c(mp.coupling), _c(mr.coupling), fp, fr,
-                  ser, lf, np.zeros((10, 3)))
+        lf = np.zeros(_LF_POINTS + 6 * len(pb.point_loads))
+        self.g = (ints, flt, B0, B1, j0, _c(gs.w_full), _c(gs.w_axial), _c(gs.gamma0), _c(gs.K0), _c(sec),
+                  _c(pb.load_vector), _c(U), _c(pb.mass_position.coupling), _c(pb.mass_theta.coupling), _c(Crot),
+                  fp, fr, ser, lf, np.zeros((10, 3)), lpt, jab, _c(jq), _c(Y), _c(Sinv), np.zeros(3 * nj))
         self._t_loads = None
         self._pw = np.zeros(1)
         self._zero = np.zeros((4, n, 3))
@@ -540,7 +575,7 @@ class NumbaGalerkinKernels:
     def _set_loads(self, t: float) -> None:
         if t == self._t_loads:
             return
-        lf = self.g[17]
+        lf = self.g[18]
         for a, vec, prof in zip(self.lpos, self.lvec, self._lprof_objs):
             lf[a:a + 3] = vec * prof(t)
         self._t_loads = t
@@ -552,7 +587,7 @@ class NumbaGalerkinKernels:
         e = np.empty
         out = (e((n, 3)), e((n, 3)), e((n, 3)), e((m, 3, 3)), e((m, 3)))
         g = self.g
-        galerkin_action(_c(u), _c(y.c), _c(y.v), _c(y.w), _c(y.R), _c(y.K), *out, g[2], g[3], g[4], g[16],
+        galerkin_action(_c(u), _c(y.c), _c(y.v), _c(y.w), _c(y.R), _c(y.K), *out, g[2], g[3], g[4], g[17],
                         g[1][_F_THR])
         return GalerkinBeamState(*out)
 

@@ -1,0 +1,20 @@
+"""One constructor for every beam formulation: collocation (primal, mixed) or Galerkin."""
+
+from __future__ import annotations
+
+from .galerkin import GalerkinBeamProblem
+from .model import BoundaryConditions, InitialConditions, Loads
+from .problem import ALL_FORMULATIONS, BeamProblem
+
+
+def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
+                 initial: InitialConditions = InitialConditions(), backend: str = "numpy",
+                 kelvin_voigt: float = 0.0, formulation: str = "primal"):
+    """A :class:`~.problem.BeamProblem` (``"primal"``, ``"mixed"``) or a
+    :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``) with these arguments."""
+    if formulation not in ALL_FORMULATIONS:
+        raise ValueError(f"formulation: expected one of {', '.join(ALL_FORMULATIONS)}, got {formulation!r}")
+    if formulation == "galerkin":
+        return GalerkinBeamProblem(space, constants, bcs, loads, initial, backend=backend, kelvin_voigt=kelvin_voigt)
+    return BeamProblem(space, constants, bcs, loads, initial, backend=backend, kelvin_voigt=kelvin_voigt,
+                       formulation=formulation)
