@@ -86,13 +86,26 @@ def test_tiny_plan_runs_the_mixed_formulation(tiny):
     assert not np.array_equal(mixed["p4 n21"].tip, primal["p4 n21"].tip)
 
 
+def test_tiny_plan_runs_the_galerkin_formulation(tiny):
+    """The Galerkin runs: one per discretization, undamped (its spectrum at rest is clean,
+    so nothing is sized), at their own stable steps."""
+    _, res = tiny
+    gal = {r.resolution: r for r in res.ours if r.formulation == "galerkin"}
+    print({k: (r.error, r.dt) for k, r in gal.items()})
+    assert sorted(gal) == ["p4 n11", "p4 n21"]
+    for r in gal.values():
+        assert r.status == "ok" and r.family == "RKMK4" and r.steps > 0 and r.kelvin_voigt == 0.0
+        assert np.isfinite(r.error) and r.error > 0
+    assert "p4 n21 galerkin" not in res.damping
+
+
 def test_outputs_and_cache(tiny):
     out, res = tiny
     made = write(res, out)
     assert [p.name for p in made] == ["work_precision.md", "work_precision.json", "work_precision.png"]
     data = json.loads((out / "work_precision.json").read_text())
     assert len(data["ours"]) == len(res.ours) and data["peers"] == []
-    assert {r["formulation"] for r in data["ours"]} == {"primal", "mixed"}
+    assert {r["formulation"] for r in data["ours"]} == {"primal", "mixed", "galerkin"}
     assert data["damping"]["p4 n21 mixed"]["tau"] > 0
     md = (out / "work_precision.md").read_text()
     assert "time error" in md and "p4 n15" in md
@@ -169,7 +182,7 @@ def test_plans_check_themselves():
     with pytest.raises(ValueError, match="formulations"):
         Plan(scene="x", t_end=1.0, every=0.5, reference=(4, 31), reference_y=0.4, discretizations=((4, 21),),
              formulations=("primal", "hybrid"))
-    assert all(plan_for(s, quick=q).formulations == ("primal", "mixed") for s in ("pendulum", "cantilever")
+    assert all(plan_for(s, quick=q).formulations == ("primal", "mixed", "galerkin") for s in ("pendulum", "cantilever")
                for q in (False, True))
     assert plan_for("cantilever").t_end == 0.05 and plan_for("pendulum").t_end == 1.0
     assert plan_for("pendulum", t_end=0.2).every == 5e-3
