@@ -25,7 +25,10 @@ class _Compiles(event.Listener):
 
 
 def _family(scene_name: str) -> str:
-    return "beam" if load_scene(scene_name).kind == "beam" else "rigid_body"
+    scene = load_scene(scene_name)
+    if scene.kind != "beam":
+        return "rigid_body"
+    return "beam_galerkin" if scene["space.formulation"] == "galerkin" else "beam"
 
 
 @pytest.mark.parametrize("scene_name", sorted(builtin_descriptions()))
