@@ -364,7 +364,7 @@ def space_study(quick: bool) -> list:
         u_a, _, _, _ = solve(pc, nc)
         u_b, cpu_b, _, _ = solve(pc, nc, SPACE_Y / 2)
         terr = np.linalg.norm(u_a - u_b) / nr
-        emit(f"### {scene}, {label}: T = {T:g} s ({FORMULATION} collocation)")
+        emit(f"### {scene}, {label}: T = {T:g} s ({FORMULATION if FORMULATION == 'galerkin' else FORMULATION + ' collocation'})")
         emit()
         emit(f"{method.upper()} at |lambda|max h = {SPACE_Y} of each discretization. Reference p = {ref_pn[0]}, "
              f"n_ctrl = {ref_pn[1]} (|lambda|max = {lam_ref:.3g} 1/s, {N_ref} steps, {cpu_ref:.1f} s CPU), "

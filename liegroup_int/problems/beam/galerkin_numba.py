@@ -190,25 +190,37 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
         js = j0[i]
         CN0, CN1, CN2, CM0, CM1, CM2 = sec[i, 0], sec[i, 1], sec[i, 2], sec[i, 3], sec[i, 4], sec[i, 5]
         J0, J1, J2 = sec[i, 6], sec[i, 7], sec[i, 8]
+        # only the sums a point's terms read: bending points (wf) theta and Omega, axial
+        # points (wa) c_s; Omega_s, v_s (and Omega at axial points) with damping only
         t0 = t1 = t2 = o0 = o1 = o2 = os0 = os1 = os2 = cs0 = cs1 = cs2 = vs0 = vs1 = vs2 = 0.0
-        for k in range(W):
-            j = js + k
-            b0, b1 = B0[i, k], B1[i, k]
-            t0 += b0 * u[1, j, 0]
-            t1 += b0 * u[1, j, 1]
-            t2 += b0 * u[1, j, 2]
-            o0 += b0 * w[j, 0]
-            o1 += b0 * w[j, 1]
-            o2 += b0 * w[j, 2]
-            os0 += b1 * w[j, 0]
-            os1 += b1 * w[j, 1]
-            os2 += b1 * w[j, 2]
-            cs0 += b1 * c[j, 0]
-            cs1 += b1 * c[j, 1]
-            cs2 += b1 * c[j, 2]
-            vs0 += b1 * v[j, 0]
-            vs1 += b1 * v[j, 1]
-            vs2 += b1 * v[j, 2]
+        bend, axial = wfi != 0.0, wai != 0.0
+        if bend or tau > 0.0:
+            for k in range(W):
+                j = js + k
+                b0 = B0[i, k]
+                t0 += b0 * u[1, j, 0]
+                t1 += b0 * u[1, j, 1]
+                t2 += b0 * u[1, j, 2]
+                o0 += b0 * w[j, 0]
+                o1 += b0 * w[j, 1]
+                o2 += b0 * w[j, 2]
+        if axial or tau > 0.0:
+            for k in range(W):
+                j = js + k
+                b1 = B1[i, k]
+                cs0 += b1 * c[j, 0]
+                cs1 += b1 * c[j, 1]
+                cs2 += b1 * c[j, 2]
+        if tau > 0.0:
+            for k in range(W):
+                j = js + k
+                b1 = B1[i, k]
+                os0 += b1 * w[j, 0]
+                os1 += b1 * w[j, 1]
+                os2 += b1 * w[j, 2]
+                vs0 += b1 * v[j, 0]
+                vs1 += b1 * v[j, 1]
+                vs2 += b1 * v[j, 2]
         r00, r01, r02 = R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]
         r10, r11, r12 = R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]
         r20, r21, r22 = R[i, 2, 0], R[i, 2, 1], R[i, 2, 2]
@@ -277,12 +289,14 @@ def galerkin_rates(c, v, w, R, K, u, out, g, pw):
         for k in range(W):
             j = js + k
             b0, b1 = B0[i, k], B1[i, k]
-            out[1, j, 0] += b0 * d0
-            out[1, j, 1] += b0 * d1
-            out[1, j, 2] += b0 * d2
-            out[2, j, 0] -= b1 * n0
-            out[2, j, 1] -= b1 * n1
-            out[2, j, 2] -= b1 * n2
+            if bend:
+                out[1, j, 0] += b0 * d0
+                out[1, j, 1] += b0 * d1
+                out[1, j, 2] += b0 * d2
+            if axial:
+                out[2, j, 0] -= b1 * n0
+                out[2, j, 1] -= b1 * n1
+                out[2, j, 2] -= b1 * n2
             out[3, j, 0] += b0 * p0 - b1 * M0
             out[3, j, 1] += b0 * p1 - b1 * M1
             out[3, j, 2] += b0 * p2 - b1 * M2
