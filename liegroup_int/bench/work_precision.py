@@ -591,7 +591,8 @@ def _envelope(runs: list[Run]) -> tuple[list[float], list[float]]:
 def plot(result: Result, path: Path) -> Path:
     """Two log-log panels. Left: error against the fine reference over CPU time, one colour
     per method, one marker per resolution, filled for primal and open for mixed
-    collocation, the lower envelope of each formulation in grey, PyElastica in black.
+    collocation, grey for Galerkin, the lower envelope of each formulation in grey,
+    PyElastica in black.
     Right: the time study, time error against CPU time per method (the paper's Fig. 4(b),
     5(b))."""
     import matplotlib
@@ -605,7 +606,8 @@ def plot(result: Result, path: Path) -> Path:
     colors = {f: plt.cm.tab10(i % 10) for i, f in enumerate(families)}
     markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*hPX"))
     forms = list(dict.fromkeys(r.formulation for r in result.ours))
-    styles = {"primal": ("-", None), "mixed": ("--", "white")}  # line style, marker face (None: filled)
+    # line style, marker face (None: filled)
+    styles = {"primal": ("-", None), "mixed": ("--", "white"), "galerkin": (":", "0.8")}
     groups: dict[tuple[str, str, str], list[Run]] = {}
     for r in ok:
         groups.setdefault((r.family, r.formulation, r.resolution), []).append(r)
@@ -622,7 +624,8 @@ def plot(result: Result, path: Path) -> Path:
         xs, ys = _envelope([r for r in ok if r.formulation == form])
         if xs:
             ls, face = styles.get(form, ("-", None))
-            name = form + (" (open markers, Kelvin-Voigt damped)" if form == "mixed" else " (filled markers)")
+            name = form + {"mixed": " (open markers, Kelvin-Voigt damped)",
+                           "galerkin": " (grey markers, undamped)"}.get(form, " (filled markers)")
             ax.loglog(xs, ys, color="0.4", ls=ls, lw=2.2, alpha=0.45, label=f"{name}: best within CPU")
     for fam, style in (("PyElastica", "k-"), ("PyElastica, our continuum model", "k--")):
         pr = sorted((r for r in result.peers if r.family == fam and r.status == "ok" and np.isfinite(r.error)),
