@@ -177,8 +177,9 @@ def _user_kernels(f, action=group_action, scale=group_scale, name: str = "user")
 def space_problem_kernels(problem) -> CompiledProblem | None:
     """The engine's view of an ODE on a homogeneous space (an ``ActionProblem``) whose ``f``
     is numba-compiled, on one point: ``Sphere()`` (SO(3) acting) and ``TangentSphere()``
-    and its powers (SE(3) per link), with the groups' compiled exp and dexpinv. ``None``
-    for other spaces (the generic loop)."""
+    and its powers (SE(3) per link), with the groups' compiled exp and dexpinv;
+    ``Stiefel`` and ``Isospectral`` (SO(n), :mod:`.compiled_son`). ``None`` for other
+    spaces (the generic loop)."""
     from ..groups import SE3, SO3, Product
     from ..manifolds import ProductSpace, Sphere, TangentSphere
 
@@ -190,7 +191,9 @@ def space_problem_kernels(problem) -> CompiledProblem | None:
         links = 1 if type(space) is TangentSphere else len(space.factors)
         group, action, name = (SE3 if links == 1 else Product(*[SE3] * links)), tangent_sphere_action, "user_ts2"
     else:
-        return None
+        from .compiled_son import son_space_kernels  # Stiefel, Isospectral (SO(n) acting)
+
+        return son_space_kernels(problem)
     size, dim = int(np.prod(space.point_shape)), int(group.dim)
 
     def pack(y):

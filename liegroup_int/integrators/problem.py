@@ -330,13 +330,17 @@ class ActionProblem(Problem):
 
     def compiled_kernels(self):
         """The compiled engine's kernels for a ``numba.njit`` ``f`` on ``Sphere()``,
-        ``TangentSphere()`` or a power of it (single points, exp coordinates;
-        :func:`~.compiled_group.space_problem_kernels`), else ``None`` (the generic loop)."""
+        ``TangentSphere()`` or a power of it, ``Stiefel`` or ``Isospectral`` (single
+        points, exp coordinates; :func:`~.compiled_group.space_problem_kernels`; the SO(n)
+        spaces with their truncated dexpinv series too), else ``None`` (the generic loop)."""
         from .compiled_group import is_compiled_function, space_problem_kernels
+        from .compiled_son import son_space_kernels
 
-        if self.coordinates == "exp" and self.dexpinv_order is None and is_compiled_function(self.f):
+        if self.coordinates != "exp" or not is_compiled_function(self.f):
+            return None
+        if self.dexpinv_order is None:
             return space_problem_kernels(self)
-        return None
+        return son_space_kernels(self, self.dexpinv_order)
 
     def vector_field(self, t, y):
         return np.asarray(self.f(t, y), dtype=float)

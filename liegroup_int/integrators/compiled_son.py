@@ -1,0 +1,192 @@
+"""Engine kernels of ODEs on the SO(n) homogeneous spaces (numba): ``Stiefel(n, k)``
+(``Lambda(Q, Y) = Q Y``) and ``Isospectral(n)`` (``Lambda(Q, L) = Q L Q^T``).
+
+A user's ``numba.njit`` ``f(t, y) -> xi`` (``xi`` of length ``n (n - 1) / 2``, the
+coordinates of :class:`~liegroup_int.groups.SOn`) then runs in the compiled engine, as on
+the sphere (:mod:`.compiled_group`). The mathematics is that of ``SOn``:
+
+* ``exp``: scaling and squaring of the degree-16 Taylor polynomial (the scaled matrix has
+  max-row-sum norm <= 1/2, truncation below 1e-19), then one Newton-Schulz step, as
+  ``SOn.exp`` ends (the generic path diagonalizes ``i hat(xi)`` instead: both are exact to
+  round-off);
+* ``dexpinv``: the Bernoulli series ``sum_{k<=K} B_k ad^k / k!`` with matrix commutators:
+  ``SOn.dexpinv``'s K = 40 terms, or ``SOn.dexpinv_series`` truncated to the method's
+  order (``ActionProblem(dexpinv_order=K)``, what ``integrate(..., space=M)`` sets);
+* the rotation angle: the spectral norm of ``hat(u)`` (``SOn.rotation_angle``).
+
+Data ``(ii, jj, coef, n, dim, point_shape, A, T, S, E, W)``: the basis indices
+(``hat(xi)[jj, ii] = xi``, ``hat(xi)[ii, jj] = -xi``), the series coefficients, sizes, the
+point shape (what the user's ``f`` sees) and ``n x n`` work arrays.
+"""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+from numba import njit
+
+from .compiled_group import _user_field, unit_scale
+from .engine import CompiledProblem, EngineKernels
+
+#: Terms of the dexpinv series (``SOn.dexpinv``: the base class's 40).
+SERIES_TERMS = 40
+_TAYLOR_DEGREE = 16
+
+
+@njit(cache=True)
+def _hat(x, ii, jj, A):
+    A[:, :] = 0.0
+    for k in range(ii.shape[0]):
+        A[jj[k], ii[k]] = x[k]
+        A[ii[k], jj[k]] = -x[k]
+
+
+@njit(cache=True)
+def _vee(M, ii, jj, out):
+    for k in range(ii.shape[0]):
+        out[k] = 0.5 * (M[jj[k], ii[k]] - M[ii[k], jj[k]])
+
+
+@njit(cache=True)
+def son_exp(A, E, W):
+    """``E = exp(A)`` for a skew ``A`` (``W`` a work array like ``A``)."""
+    n = A.shape[0]
+    norm = 0.0
+    for i in range(n):
+        r = 0.0
+        for j in range(n):
+            r += abs(A[i, j])
+        norm = max(norm, r)
+    s = 0
+    while norm > 0.5:
+        norm *= 0.5
+        s += 1
+    B = A * (0.5 ** s)
+    E[:, :] = 0.0
+    for i in range(n):
+        E[i, i] = 1.0
+    for k in range(_TAYLOR_DEGREE, 0, -1):  # Horner: E <- I + B E / k
+        W[:, :] = B @ E
+        for i in range(n):
+            for j in range(n):
+                E[i, j] = W[i, j] / k + (1.0 if i == j else 0.0)
+    for _ in range(s):
+        W[:, :] = E @ E
+        E[:, :] = W
+    W[:, :] = E.T @ E  # one Newton-Schulz step: E (3 I - E^T E) / 2
+    for i in range(n):
+        for j in range(n):
+            W[i, j] = (3.0 if i == j else 0.0) - W[i, j]
+    E[:, :] = 0.5 * (E @ W)
+
+
+@njit(cache=True)
+def son_dexpinv(data, u, w, out):
+    """``out = dexpinv_u(w)`` (``w`` may be ``out``)."""
+    ii, jj, coef, A, T, S = data[0], data[1], data[2], data[6], data[7], data[8]
+    _hat(u, ii, jj, A)
+    _hat(w, ii, jj, T)
+    S[:, :] = coef[0] * T
+    for k in range(1, coef.shape[0]):
+        T[:, :] = A @ T - T @ A
+        if coef[k] != 0.0:
+            S[:, :] += coef[k] * T
+    _vee(S, ii, jj, out)
+
+
+@njit(cache=True)
+def son_angle(data, u):
+    """Spectral norm of ``hat(u)``: the largest rotation angle of ``exp(u)``."""
+    ii, jj, A, T = data[0], data[1], data[6], data[7]
+    _hat(u, ii, jj, A)
+    T[:, :] = A.T @ A
+    lam = np.linalg.eigvalsh(T)
+    return np.sqrt(max(lam[-1], 0.0))
+
+
+@njit(cache=True)
+def stiefel_action(data, u, y, out):
+    """``out = exp(u) Y`` (Stiefel: ``Y`` of shape ``(n, k)``)."""
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[6], data[9], data[10]
+    _hat(u, ii, jj, A)
+    son_exp(A, E, W)
+    k = y.shape[0] // n
+    out.reshape((n, k))[:, :] = E @ y.reshape((n, k))
+
+
+@njit(cache=True)
+def isospectral_action(data, u, y, out):
+    """``out = Q L Q^T`` with ``Q = exp(u)`` (Isospectral: ``L`` of shape ``(n, n)``)."""
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[6], data[9], data[10]
+    _hat(u, ii, jj, A)
+    son_exp(A, E, W)
+    W[:, :] = E @ y.reshape((n, n))
+    out.reshape((n, n))[:, :] = W @ E.T
+
+
+def _user_rate_son(data, t, y, u, out):
+    """``out = dexpinv_u f(t, y)``."""
+    _user_field(data, t, y, out)  # the compiled copy bound next to this one
+    son_dexpinv(data, u, out, out)
+    return 0.0
+
+
+_KERNELS: dict = {}
+
+
+def _kernels(f, action, name: str) -> EngineKernels:
+    kern = _KERNELS.get((f, name))
+    if kern is None:
+        ns = dict(globals(), USER_F=f)
+        made = {}
+        for fn in (_user_field, _user_rate_son):
+            copy = types.FunctionType(fn.__code__, ns, fn.__name__)
+            made[fn.__name__] = ns[fn.__name__] = njit(cache=False)(copy)
+        kern = EngineKernels(name, made["_user_rate_son"], action, son_angle, unit_scale,
+                             field=made["_user_field"], dexpinv=son_dexpinv, cache=False)
+        _KERNELS[(f, name)] = kern
+    return kern
+
+
+def son_data(group, point_shape, order: int | None = None) -> tuple:
+    """The kernels' data for ``SOn(n)`` acting on points of ``point_shape``, the dexpinv
+    series to ``order`` (``None``: :data:`SERIES_TERMS`)."""
+    from ..groups._series import bernoulli_numbers, factorials
+
+    terms = SERIES_TERMS if order is None else int(order)
+    bern, fact = bernoulli_numbers(terms), factorials(terms)
+    coef = np.array([bern[k] / fact[k] for k in range(terms + 1)])
+    n = int(group.n)
+    work = tuple(np.zeros((n, n)) for _ in range(5))
+    return (np.ascontiguousarray(group._i, dtype=np.int64), np.ascontiguousarray(group._j, dtype=np.int64), coef,
+            n, int(group.dim), tuple(int(k) for k in point_shape)) + work
+
+
+def son_space_kernels(problem, order: int | None = None) -> CompiledProblem | None:
+    """The engine's view of an ``ActionProblem`` with a compiled ``f`` on one point of
+    ``Stiefel(n, k)`` or ``Isospectral(n)`` (dexpinv series to ``order``, ``None``: the
+    group's 40 terms); ``None`` for other spaces."""
+    from ..manifolds import Isospectral, Stiefel
+
+    space = problem.space
+    if type(space) is Stiefel:
+        action, name = stiefel_action, "user_stiefel"
+    elif type(space) is Isospectral:
+        action, name = isospectral_action, "user_isospectral"
+    else:
+        return None
+    if space.group.n == 2:
+        return None  # SO(2): the generic path (its exp is closed-form there)
+    shape = tuple(int(k) for k in space.point_shape)
+    size, dim = int(np.prod(shape)), int(space.group.dim)
+
+    def pack(y):
+        y = np.asarray(y, dtype=float)
+        if y.shape != shape:
+            raise ValueError(f"a numba-compiled f runs on one point of shape {shape}, got {y.shape}; "
+                             "use a plain Python f for batches")
+        return np.ascontiguousarray(y).reshape(size)
+
+    return CompiledProblem(_kernels(problem.f, action, name), son_data(space.group, shape, order), lambda p: dim,
+                           pack, lambda flat: flat.reshape(shape))
