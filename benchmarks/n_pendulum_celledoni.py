@@ -2,7 +2,7 @@
 Murari & Owren, "Lie group integrators for mechanical systems" (Int. J. Comput. Math. 99,
 2022), against their published set-up and numbers.
 
-    python benchmarks/n_pendulum_celledoni.py [--n 2 4 10 20]
+    python benchmarks/n_pendulum_celledoni.py [--n 2 4 6 10]
 
 Their set-up (the authors' MATLAB code, github.com/davidemurari/NFold3dPendulumLieGroups,
 ``AA_Variable.m``, commit b961363b, and its 2022 clean-up in THREAD-3-2): N links of length
@@ -55,7 +55,9 @@ def case(n: int):
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, nargs="+", default=[2, 4, 10, 20])
+    # N = 20 works too, but its 1e-12 reference takes over 25 min in the generic loop (the
+    # example's field is plain Python, one 3N x 3N solve per stage)
+    ap.add_argument("--n", type=int, nargs="+", default=[2, 4, 6, 10])
     ap.add_argument("--tol", type=float, default=1e-6)
     args = ap.parse_args(argv)
     print("| N | ours: steps (rejected) | ours: accuracy at T = 3 | ours: energy drift [J] | ours: CPU [s] "
