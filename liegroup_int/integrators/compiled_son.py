@@ -14,6 +14,9 @@ the sphere (:mod:`.compiled_group`). The mathematics is that of ``SOn``:
   order (``ActionProblem(dexpinv_order=K)``, what ``integrate(..., space=M)`` sets);
 * the rotation angle: the spectral norm of ``hat(u)`` (``SOn.rotation_angle``).
 
+The kernels write into the data's work arrays (plain loops: the matrices are small), so a
+stage allocates nothing (the once-per-step angle check's eigenvalue call does).
+
 Data ``(ii, jj, coef, n, dim, point_shape, A, T, S, E, W)``: the basis indices
 (``hat(xi)[jj, ii] = xi``, ``hat(xi)[ii, jj] = -xi``), the series coefficients, sizes, the
 point shape (what the user's ``f`` sees) and ``n x n`` work arrays.
@@ -49,8 +52,21 @@ def _vee(M, ii, jj, out):
 
 
 @njit(cache=True)
+def _matmul_into(X, Y, out):
+    """``out = X Y`` for small square matrices, without temporaries."""
+    n = X.shape[0]
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += X[i, k] * Y[k, j]
+            out[i, j] = acc
+
+
+@njit(cache=True)
 def son_exp(A, E, W):
-    """``E = exp(A)`` for a skew ``A`` (``W`` a work array like ``A``)."""
+    """``E = exp(A)`` for a skew ``A``, overwriting ``A`` (``W`` a work array like ``A``);
+    no temporaries."""
     n = A.shape[0]
     norm = 0.0
     for i in range(n):
@@ -62,36 +78,56 @@ def son_exp(A, E, W):
     while norm > 0.5:
         norm *= 0.5
         s += 1
-    B = A * (0.5 ** s)
-    E[:, :] = 0.0
+    scale = 0.5 ** s
     for i in range(n):
-        E[i, i] = 1.0
-    for k in range(_TAYLOR_DEGREE, 0, -1):  # Horner: E <- I + B E / k
-        W[:, :] = B @ E
+        for j in range(n):
+            A[i, j] *= scale
+            E[i, j] = 1.0 if i == j else 0.0
+    for k in range(_TAYLOR_DEGREE, 0, -1):  # Horner: E <- I + A E / k
+        _matmul_into(A, E, W)
         for i in range(n):
             for j in range(n):
                 E[i, j] = W[i, j] / k + (1.0 if i == j else 0.0)
     for _ in range(s):
-        W[:, :] = E @ E
+        _matmul_into(E, E, W)
         E[:, :] = W
-    W[:, :] = E.T @ E  # one Newton-Schulz step: E (3 I - E^T E) / 2
+    # one Newton-Schulz step: E <- E (3 I - E^T E) / 2 (A is free again: its work space)
     for i in range(n):
         for j in range(n):
-            W[i, j] = (3.0 if i == j else 0.0) - W[i, j]
-    E[:, :] = 0.5 * (E @ W)
+            acc = 0.0
+            for k in range(n):
+                acc += E[k, i] * E[k, j]
+            A[i, j] = (3.0 if i == j else 0.0) - acc
+    _matmul_into(E, A, W)
+    for i in range(n):
+        for j in range(n):
+            E[i, j] = 0.5 * W[i, j]
 
 
 @njit(cache=True)
 def son_dexpinv(data, u, w, out):
     """``out = dexpinv_u(w)`` (``w`` may be ``out``)."""
     ii, jj, coef, A, T, S = data[0], data[1], data[2], data[6], data[7], data[8]
+    W = data[10]
+    n = A.shape[0]
     _hat(u, ii, jj, A)
     _hat(w, ii, jj, T)
-    S[:, :] = coef[0] * T
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = coef[0] * T[i, j]
     for k in range(1, coef.shape[0]):
-        T[:, :] = A @ T - T @ A
-        if coef[k] != 0.0:
-            S[:, :] += coef[k] * T
+        for i in range(n):  # W = [A, T]
+            for j in range(n):
+                acc = 0.0
+                for m in range(n):
+                    acc += A[i, m] * T[m, j] - T[i, m] * A[m, j]
+                W[i, j] = acc
+        c = coef[k]
+        for i in range(n):
+            for j in range(n):
+                T[i, j] = W[i, j]
+                if c != 0.0:
+                    S[i, j] += c * W[i, j]
     _vee(S, ii, jj, out)
 
 
@@ -100,7 +136,13 @@ def son_angle(data, u):
     """Spectral norm of ``hat(u)``: the largest rotation angle of ``exp(u)``."""
     ii, jj, A, T = data[0], data[1], data[6], data[7]
     _hat(u, ii, jj, A)
-    T[:, :] = A.T @ A
+    n = A.shape[0]
+    for i in range(n):  # T = A^T A
+        for j in range(n):
+            acc = 0.0
+            for m in range(n):
+                acc += A[m, i] * A[m, j]
+            T[i, j] = acc
     lam = np.linalg.eigvalsh(T)
     return np.sqrt(max(lam[-1], 0.0))
 
@@ -112,7 +154,12 @@ def stiefel_action(data, u, y, out):
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
     k = y.shape[0] // n
-    out.reshape((n, k))[:, :] = E @ y.reshape((n, k))
+    for i in range(n):
+        for j in range(k):
+            acc = 0.0
+            for m in range(n):
+                acc += E[i, m] * y[m * k + j]
+            out[i * k + j] = acc
 
 
 @njit(cache=True)
@@ -121,8 +168,18 @@ def isospectral_action(data, u, y, out):
     ii, jj, n, A, E, W = data[0], data[1], data[3], data[6], data[9], data[10]
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
-    W[:, :] = E @ y.reshape((n, n))
-    out.reshape((n, n))[:, :] = W @ E.T
+    for i in range(n):  # W = E L
+        for j in range(n):
+            acc = 0.0
+            for m in range(n):
+                acc += E[i, m] * y[m * n + j]
+            W[i, j] = acc
+    for i in range(n):  # out = W E^T
+        for j in range(n):
+            acc = 0.0
+            for m in range(n):
+                acc += W[i, m] * E[j, m]
+            out[i * n + j] = acc
 
 
 def _user_rate_son(data, t, y, u, out):

@@ -442,8 +442,7 @@ class GalerkinBeamProblem(Problem):
     def _support_loads(self, t: float, y: GalerkinBeamState):
         """Force (spatial) and couple (material) each support exerts on its control value:
         the residual of that row, ``mu (M v')_d - F_d`` and ``J (M W')_d - T_d``."""
-        k = self.increment_rate(t, y, np.zeros((4, self.n, 3))) if self._nb is None else \
-            self._nb.increment_rate(t, y, np.zeros((4, self.n, 3)))
+        k = self.increment_rate(t, y, np.zeros((4, self.n, 3)))
         F, T = self._forces(t, y, self.B0 @ y.w)
         out = {}
         for e in self.ends:
