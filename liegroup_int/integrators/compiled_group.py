@@ -194,24 +194,17 @@ def space_problem_kernels(problem) -> CompiledProblem | None:
         from .compiled_son import son_space_kernels  # Stiefel, Isospectral (SO(n) acting)
 
         return son_space_kernels(problem)
-    size, dim = int(np.prod(space.point_shape)), int(group.dim)
-
-    def pack(y):
-        y = np.asarray(y, dtype=float)
-        if y.shape != space.point_shape:
-            raise ValueError(f"a numba-compiled f runs on one point of shape {space.point_shape}, got {y.shape}; "
-                             "use a plain Python f for batches")
-        return np.ascontiguousarray(y).reshape(size)
-
+    dim = int(group.dim)
     return CompiledProblem(_user_kernels(problem.f, action, unit_scale, name), group_data(group, space.point_shape),
-                           lambda n: dim, pack, lambda flat: flat.reshape(space.point_shape))
+                           lambda n: dim, single_point_pack(space.point_shape),
+                           lambda flat: flat.reshape(space.point_shape))
 
 
-def group_problem_kernels(problem) -> CompiledProblem:
-    """The engine's view of a :class:`~liegroup_int.integrators.problem.GroupProblem`
-    whose ``f`` is numba-compiled: single points of ``problem.space`` only."""
-    shape = tuple(int(k) for k in problem.space.point_shape)
-    size, dim = int(np.prod(shape)), int(problem.space.dim)
+def single_point_pack(shape):
+    """``pack(y)`` of a user's compiled ``f``: one point of ``shape`` as a flat contiguous
+    vector; a batch is refused in one line (the compiled ``f`` sees single points)."""
+    shape = tuple(int(k) for k in shape)
+    size = int(np.prod(shape))
 
     def pack(y):
         y = np.asarray(y, dtype=float)
@@ -220,7 +213,13 @@ def group_problem_kernels(problem) -> CompiledProblem:
                              "use a plain Python f for batches")
         return np.ascontiguousarray(y).reshape(size)
 
-    def unpack(flat):
-        return flat.reshape(shape)
+    return pack
 
-    return CompiledProblem(_user_kernels(problem.f), group_data(problem.space, shape), lambda n: dim, pack, unpack)
+
+def group_problem_kernels(problem) -> CompiledProblem:
+    """The engine's view of a :class:`~liegroup_int.integrators.problem.GroupProblem`
+    whose ``f`` is numba-compiled: single points of ``problem.space`` only."""
+    shape = tuple(int(k) for k in problem.space.point_shape)
+    dim = int(problem.space.dim)
+    return CompiledProblem(_user_kernels(problem.f), group_data(problem.space, shape), lambda n: dim,
+                           single_point_pack(shape), lambda flat: flat.reshape(shape))

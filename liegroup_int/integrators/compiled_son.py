@@ -29,7 +29,7 @@ import types
 import numpy as np
 from numba import njit
 
-from .compiled_group import _user_field, unit_scale
+from .compiled_group import _user_field, single_point_pack, unit_scale
 from .engine import CompiledProblem, EngineKernels
 
 #: Terms of the dexpinv series (``SOn.dexpinv``: the base class's 40).
@@ -236,14 +236,6 @@ def son_space_kernels(problem, order: int | None = None) -> CompiledProblem | No
     if space.group.n == 2:
         return None  # SO(2): the generic path (its exp is closed-form there)
     shape = tuple(int(k) for k in space.point_shape)
-    size, dim = int(np.prod(shape)), int(space.group.dim)
-
-    def pack(y):
-        y = np.asarray(y, dtype=float)
-        if y.shape != shape:
-            raise ValueError(f"a numba-compiled f runs on one point of shape {shape}, got {y.shape}; "
-                             "use a plain Python f for batches")
-        return np.ascontiguousarray(y).reshape(size)
-
+    dim = int(space.group.dim)
     return CompiledProblem(_kernels(problem.f, action, name), son_data(space.group, shape, order), lambda p: dim,
-                           pack, lambda flat: flat.reshape(shape))
+                           single_point_pack(shape), lambda flat: flat.reshape(shape))

@@ -39,6 +39,7 @@ from ...iga.galerkin import BandedSPD, GalerkinSpace
 from ...integrators import Problem
 from .kinematics import jr_times, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
+from .problem import BeamProblem
 
 #: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
 INTEGRATIONS = ("reduced", "full")
@@ -241,12 +242,7 @@ class GalerkinBeamProblem(Problem):
     # ------------------------------------------------------------------ set-up
     @staticmethod
     def _end(index, point, normal, kind, load, motion, translation):
-        where = "start" if normal < 0 else "end"
-        if kind == "clamped" and load.active:
-            raise ValueError(f"loads.{where}: a load on a clamped end does no work; remove it or free the end")
-        if kind == "hinged" and np.any(load.force):
-            raise ValueError(f"loads.{where}.force: a force on a hinged end is taken by the support; remove it "
-                             "or free the end")
+        BeamProblem.check_end_load(kind, load, normal)
         return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged"),
                      fix_rotation=kind == "clamped", load=load, motion=motion, translation=translation)
 
@@ -414,15 +410,9 @@ class GalerkinBeamProblem(Problem):
                 T[row] += Re.T @ self._end_couple(ld, t, Re)
         return F, T
 
-    @staticmethod
-    def _end_force(ld, t: float, R_end: np.ndarray) -> np.ndarray:
-        f = np.asarray(ld.force, float) * ld.force_profile(t)
-        return R_end @ f if ld.follower else f
-
-    @staticmethod
-    def _end_couple(ld, t: float, R_end: np.ndarray) -> np.ndarray:
-        m = np.asarray(ld.couple, float) * ld.couple_profile(t)
-        return R_end @ m if ld.follower else m
+    # the spatial end loads at t, dead or turned by the end rotation (follower)
+    _end_force = staticmethod(BeamProblem._end_force)
+    _end_couple = staticmethod(BeamProblem._end_couple)
 
     def increment_scale(self, y) -> np.ndarray:
         scale = np.ones((4, self.n, 3))

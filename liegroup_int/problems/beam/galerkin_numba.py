@@ -34,10 +34,18 @@ import math
 import numpy as np
 from numba import njit
 
-from ...groups.kernels_numba import normalize_rotations as _newton_schulz
 from ...groups.so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
 from ...integrators.engine import CompiledProblem, EngineKernels
-from .kernels_numba import _SERIES_KEYS, _coef_ABC, _coef_D, _cross, _set_loads, profile_row
+from .kernels_numba import (  # the state's first array is c, its fourth R: the collocation ones apply
+    _SERIES_KEYS,
+    _coef_ABC,
+    _coef_D,
+    _cross,
+    _set_loads,
+    engine_end_step,
+    engine_scale,
+    profile_row,
+)
 
 _FM = {"contract"}
 
@@ -428,25 +436,9 @@ def engine_action(data, u, y0, y1):
 
 
 @njit(cache=True, fastmath=False, inline="always")
-def engine_end_step(data, y):
-    _newton_schulz(y[3])
-
-
-@njit(cache=True, fastmath=False, inline="always")
 def engine_angle(data, u):
     g = data[0]
     return galerkin_angle(u, g[2], g[4])
-
-
-@njit(cache=True, fastmath=False, inline="always")
-def engine_scale(data, y, out):
-    c = y[0]
-    n = c.shape[0]
-    for i in range(n):
-        for d in range(3):
-            out[3 * i + d] = abs(c[i, d])
-    for j in range(3 * n, out.shape[0]):
-        out[j] = 1.0
 
 
 @njit(cache=True, fastmath=False, inline="always")

@@ -226,13 +226,19 @@ class BeamProblem(Problem):
 
     # ------------------------------------------------------------------ set-up
     @staticmethod
-    def _end(index, normal, kind, load, l_s, motion=None, translation=None):
+    def check_end_load(kind: str, load, normal: float) -> None:
+        """Refuse a load a support would take: any load on a clamped end, a force on a
+        hinged one (``normal`` -1 at s = 0, +1 at s = L; shared by every formulation)."""
+        where = "start" if normal < 0 else "end"
         if kind == "clamped" and load.active:
-            raise ValueError(f"loads.{'start' if normal < 0 else 'end'}: a load on a clamped end does no work; "
-                             "remove it or free the end")
+            raise ValueError(f"loads.{where}: a load on a clamped end does no work; remove it or free the end")
         if kind == "hinged" and np.any(load.force):
-            raise ValueError(f"loads.{'start' if normal < 0 else 'end'}.force: a force on a hinged end is "
-                             "taken by the support; remove it or free the end")
+            raise ValueError(f"loads.{where}.force: a force on a hinged end is taken by the support; remove it "
+                             "or free the end")
+
+    @staticmethod
+    def _end(index, normal, kind, load, l_s, motion=None, translation=None):
+        BeamProblem.check_end_load(kind, load, normal)
         return _End(
             index=index, normal=normal, factor=C_STAR / l_s,
             fix_position=kind in ("clamped", "hinged"), fix_rotation=kind == "clamped",
