@@ -28,7 +28,8 @@ import numpy as np
 
 from . import __version__
 from .guards import EnergyBalance, diagnose, start_checks
-from .integrators import BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method
+from .integrators import (BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method,
+                          stepper_for)
 from .io import HistoryWriter, write_json
 from .io.checkpoint import read_checkpoint, write_checkpoint
 from .scenes import KINDS, Scene, SceneError, load_scene
@@ -122,13 +123,9 @@ def warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
 
     c = time.perf_counter()
     try:
-        hook = getattr(problem, "compiled_kernels", None)
-        cp = hook() if hook is not None else None
-        if cp is None:  # no compiled loop (and no import of the engine, hence of numba)
+        st = stepper_for(problem, tab)
+        if st is None:  # no compiled loop (and no import of the engine, hence of numba)
             return 0.0
-        from .integrators.engine import CompiledStepper
-
-        st = CompiledStepper(cp, tab)
         if dt is not None:
             st.advance(t0, y0, t0 + dt, dt, 1, math.inf)
         else:

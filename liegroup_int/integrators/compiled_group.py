@@ -15,14 +15,15 @@ of the table. A problem on a group then supplies only its vector field:
 
 from __future__ import annotations
 
+import math
 import types
 
 import numpy as np
 from numba import njit
 
-import math
-
+from ..groups import SE3, SO3, Product
 from ..groups.kernels_numba import (
+    CompiledGroup,
     _coef_AB,
     _cross,
     _exp_rot,
@@ -85,7 +86,6 @@ def group_scale(data, y, out):
 def group_data(space, *extra) -> tuple:
     """``(ft, ser, thr, point_size, dim, *extra)`` for the group kernels on ``space`` (one
     point's factor table; states hold any number of points one after the other)."""
-    from ..groups.kernels_numba import CompiledGroup
 
     cg = CompiledGroup.of(space)
     if cg is None:
@@ -174,26 +174,22 @@ def _user_kernels(f, action=group_action, scale=group_scale, name: str = "user")
     return kern
 
 
-def space_problem_kernels(problem) -> CompiledProblem | None:
-    """The engine's view of an ODE on a homogeneous space (an ``ActionProblem``) whose ``f``
-    is numba-compiled, on one point: ``Sphere()`` (SO(3) acting) and ``TangentSphere()``
-    and its powers (SE(3) per link), with the groups' compiled exp and dexpinv;
-    ``Stiefel`` and ``Isospectral`` (SO(n), :mod:`.compiled_son`). ``None`` for other
-    spaces (the generic loop)."""
-    from ..groups import SE3, SO3, Product
-    from ..manifolds import ProductSpace, Sphere, TangentSphere
+def sphere_kernels(problem) -> CompiledProblem:
+    """The engine's view of an ODE on ``Sphere()`` (SO(3) acting) with a numba-compiled ``f``,
+    on one point, with the group's compiled exp and dexpinv."""
+    return _space_kernels(problem, SO3, sphere_action, "user_sphere")
 
+
+def tangent_sphere_kernels(problem) -> CompiledProblem:
+    """The engine's view of an ODE on ``TangentSphere()`` or a power of it (SE(3) per link)
+    with a numba-compiled ``f``, on one point."""
+    factors = getattr(problem.space, "factors", (problem.space,))
+    group = SE3 if len(factors) == 1 else Product(*[SE3] * len(factors))
+    return _space_kernels(problem, group, tangent_sphere_action, "user_ts2")
+
+
+def _space_kernels(problem, group, action, name) -> CompiledProblem:
     space = problem.space
-    if type(space) is Sphere:
-        group, action, name = SO3, sphere_action, "user_sphere"
-    elif type(space) is TangentSphere or (type(space) is ProductSpace
-                                          and all(type(f) is TangentSphere for f in space.factors)):
-        links = 1 if type(space) is TangentSphere else len(space.factors)
-        group, action, name = (SE3 if links == 1 else Product(*[SE3] * links)), tangent_sphere_action, "user_ts2"
-    else:
-        from .compiled_son import son_space_kernels  # Stiefel, Isospectral (SO(n) acting)
-
-        return son_space_kernels(problem)
     dim = int(group.dim)
     return CompiledProblem(_user_kernels(problem.f, action, unit_scale, name), group_data(group, space.point_shape),
                            lambda n: dim, single_point_pack(space.point_shape),

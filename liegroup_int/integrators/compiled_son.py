@@ -10,7 +10,8 @@ the sphere (:mod:`.compiled_group`). The mathematics is that of ``SOn``:
   ``SOn.exp`` ends (the generic path diagonalizes ``i hat(xi)`` instead: both are exact to
   round-off);
 * ``dexpinv``: the Bernoulli series ``sum_{k<=K} B_k ad^k / k!`` with matrix commutators:
-  ``SOn.dexpinv``'s K = 40 terms, or ``SOn.dexpinv_series`` truncated to the method's
+  K = 40 terms (equal to ``SOn.dexpinv``'s closed form to round-off while ``|ad_u| < 2``,
+  far above a step's increments), or ``SOn.dexpinv_series`` truncated to the method's
   order (``ActionProblem(dexpinv_order=K)``, what ``integrate(..., space=M)`` sets);
 * the rotation angle: the spectral norm of ``hat(u)`` (``SOn.rotation_angle``).
 
@@ -32,7 +33,7 @@ from numba import njit
 from .compiled_group import _user_field, single_point_pack, unit_scale
 from .engine import CompiledProblem, EngineKernels
 
-#: Terms of the dexpinv series (``SOn.dexpinv``: the base class's 40).
+#: Terms of the dexpinv series without a truncation order (the base class's 40).
 SERIES_TERMS = 40
 _TAYLOR_DEGREE = 16
 

@@ -65,9 +65,11 @@ def _check_finite(u: np.ndarray, t: float, step: int) -> None:
         raise _blow_up(t, step)
 
 
-def _compiled(problem: Problem, tab: ButcherTableau, monitor):
-    """The compiled engine's loops for the problem (:meth:`Problem.compiled_kernels`), or
-    ``None``: no kernels (duck-typed problems have none), or a per-step monitor."""
+def stepper_for(problem, tab: ButcherTableau, monitor=None):
+    """The compiled engine's loops (:class:`~.engine.CompiledStepper`) for ``problem`` and
+    ``tab``, or ``None``: the problem has no compiled kernels (:meth:`Problem.compiled_kernels`;
+    duck-typed problems have none), or a per-step ``monitor`` needs the generic loop. The
+    engine (hence numba) is imported only when there are kernels to run."""
     hook = getattr(problem, "compiled_kernels", None)
     cp = hook() if (hook is not None and monitor is None) else None
     if cp is None:
@@ -139,7 +141,7 @@ def integrate_fixed(
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
     cf = is_commutator_free(tab)  # several exponentials per stage, no dexpinv
-    stepper = _compiled(problem, tab, monitor) if not cf else None
+    stepper = stepper_for(problem, tab, monitor) if not cf else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
@@ -245,7 +247,7 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    stepper = _compiled(problem, tab, monitor)
+    stepper = stepper_for(problem, tab, monitor)
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)

@@ -51,7 +51,6 @@ from numba import njit
 
 from . import controller as _controller
 from .combine_numba import combine_into as _combine
-from .problem import AdaptiveAdvance, Advance
 
 ADVANCE_OK, ADVANCE_NON_FINITE, ADVANCE_ANGLE = 0, 1, 2
 ADAPTIVE_OK, ADAPTIVE_MAX_STEPS, ADAPTIVE_UNDERFLOW = 0, 1, 2
@@ -96,6 +95,97 @@ def flat_copy_state(data, src, dst):
 def flat_view(data, x):
     """Increments as the kernels see them: flat (the default)."""
     return x
+
+
+
+@dataclass(frozen=True)
+class Advance:
+    """What the compiled engine's fixed-step loop reports back
+    (:meth:`CompiledStepper.advance`).
+
+    Attributes
+    ----------
+    y : state
+        State after the accepted steps.
+    t : float
+        Its time.
+    steps : int
+        Accepted steps.
+    h_min, h_max : float
+        Smallest and largest accepted step (``inf``, ``0`` if none).
+    status : {"ok", "non-finite", "angle"}
+        ``"ok"``: all requested steps taken. Otherwise the next step failed the driver's
+        checks: a non-finite increment, or a rotation increment above the bound.
+    t_fail : float
+        Time at which the failed step would have ended (NaN if none).
+    angle : float
+        Rotation angle of the failed step's increment (``"angle"`` only).
+    quadrature : float
+        ``sum h b . q`` of the accepted steps (``Problem.quadrature_rate``), 0 if none.
+    rhs_evals : int
+        Vector-field evaluations made (the failed step's included).
+    """
+
+    y: object
+    t: float
+    steps: int
+    h_min: float
+    h_max: float
+    status: str
+    t_fail: float
+    angle: float
+    quadrature: float = 0.0
+    rhs_evals: int = 0
+
+
+
+@dataclass(frozen=True)
+class AdaptiveAdvance:
+    """What the compiled engine's adaptive loop reports back
+    (:meth:`CompiledStepper.advance_to`).
+
+    Attributes
+    ----------
+    y : state
+        State after the accepted steps.
+    t : float
+        Its time (the requested stop if ``status == "ok"``).
+    h : float
+        Next step to try (after the last accepted or rejected step); for
+        ``"underflow"`` the step that fell below the bound.
+    err_prev : float
+        Controller memory (error norm of the last accepted step, at least 1e-4).
+    steps, rejected, attempts : int
+        Accepted steps, rejected steps, and all steps tried (each costs one
+        evaluation per stage).
+    h_min, h_max : float
+        Smallest and largest accepted step (``inf``, ``0`` if none).
+    status : {"ok", "max-steps", "underflow"}
+        ``"ok"``: landed on the stop. ``"max-steps"``: the step budget ran out before
+        the next attempt. ``"underflow"``: a rejection shrank the step below
+        ``1e-14 max(1, |t|)``.
+    quadrature : float
+        ``sum h b . q`` of the accepted steps (``Problem.quadrature_rate``), 0 if none.
+    rhs_evals : int
+        Vector-field evaluations made.
+    rate : float
+        Controller memory: the rotation rate once the guard has rejected a step, else 0
+        (:func:`~liegroup_int.integrators.controller.rotation_rate`).
+    """
+
+    y: object
+    t: float
+    h: float
+    err_prev: float
+    steps: int
+    rejected: int
+    attempts: int
+    h_min: float
+    h_max: float
+    status: str
+    quadrature: float = 0.0
+    rhs_evals: int = 0
+    rate: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -425,7 +515,7 @@ class CompiledStepper:
     def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float) -> Advance:
         """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
         ends at ``t_start + (i + 1) dt``, the last one at ``t_stop``); ``y`` is not
-        modified. See :class:`~liegroup_int.integrators.problem.Advance`."""
+        modified. See :class:`Advance`."""
         cp, flat = self.cp, self.cp.pack(y)
         out = self.engine.advance_fixed(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal,
                                         flat, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
@@ -437,7 +527,7 @@ class CompiledStepper:
                    gains) -> AdaptiveAdvance:
         """Accepted and rejected steps from ``(t, y)`` until landing on ``stop`` (``y`` not
         modified); ``gains`` from :meth:`~.controller.PIController.gains`. See
-        :class:`~liegroup_int.integrators.problem.AdaptiveAdvance`."""
+        :class:`AdaptiveAdvance`."""
         if self.e is None:
             raise ValueError(f"method {self.tab.name!r} has no embedded pair")
         cp, flat = self.cp, self.cp.pack(y)
@@ -449,11 +539,3 @@ class CompiledStepper:
         return AdaptiveAdvance(cp.unpack(yf), float(t), float(h), float(err_prev), int(steps), int(rejected),
                                int(attempts), float(h_min), float(h_max_acc), _ADAPTIVE_STATUS[status], float(quad),
                                int(evals), float(rate))
-
-
-def compiled_stepper(problem, tab) -> CompiledStepper | None:
-    """The engine's loops for ``problem`` and ``tab``, or ``None`` when the problem has no
-    compiled kernels (:meth:`Problem.compiled_kernels`; duck-typed problems have none)."""
-    hook = getattr(problem, "compiled_kernels", None)
-    cp = hook() if hook is not None else None
-    return CompiledStepper(cp, tab) if cp is not None else None

@@ -17,102 +17,11 @@ override :meth:`increment_rate` directly. On R^n, ``Lambda(u, y) = y + u`` and
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..groups import LieGroup
-
-
-@dataclass(frozen=True)
-class Advance:
-    """What the compiled engine's fixed-step loop reports back
-    (:meth:`~liegroup_int.integrators.engine.CompiledStepper.advance`).
-
-    Attributes
-    ----------
-    y : state
-        State after the accepted steps.
-    t : float
-        Its time.
-    steps : int
-        Accepted steps.
-    h_min, h_max : float
-        Smallest and largest accepted step (``inf``, ``0`` if none).
-    status : {"ok", "non-finite", "angle"}
-        ``"ok"``: all requested steps taken. Otherwise the next step failed the driver's
-        checks: a non-finite increment, or a rotation increment above the bound.
-    t_fail : float
-        Time at which the failed step would have ended (NaN if none).
-    angle : float
-        Rotation angle of the failed step's increment (``"angle"`` only).
-    quadrature : float
-        ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
-    rhs_evals : int
-        Vector-field evaluations made (the failed step's included).
-    """
-
-    y: object
-    t: float
-    steps: int
-    h_min: float
-    h_max: float
-    status: str
-    t_fail: float
-    angle: float
-    quadrature: float = 0.0
-    rhs_evals: int = 0
-
-
-
-@dataclass(frozen=True)
-class AdaptiveAdvance:
-    """What the compiled engine's adaptive loop reports back
-    (:meth:`~liegroup_int.integrators.engine.CompiledStepper.advance_to`).
-
-    Attributes
-    ----------
-    y : state
-        State after the accepted steps.
-    t : float
-        Its time (the requested stop if ``status == "ok"``).
-    h : float
-        Next step to try (after the last accepted or rejected step); for
-        ``"underflow"`` the step that fell below the bound.
-    err_prev : float
-        Controller memory (error norm of the last accepted step, at least 1e-4).
-    steps, rejected, attempts : int
-        Accepted steps, rejected steps, and all steps tried (each costs one
-        evaluation per stage).
-    h_min, h_max : float
-        Smallest and largest accepted step (``inf``, ``0`` if none).
-    status : {"ok", "max-steps", "underflow"}
-        ``"ok"``: landed on the stop. ``"max-steps"``: the step budget ran out before
-        the next attempt. ``"underflow"``: a rejection shrank the step below
-        ``1e-14 max(1, |t|)``.
-    quadrature : float
-        ``sum h b . q`` of the accepted steps (:meth:`Problem.quadrature_rate`), 0 if none.
-    rhs_evals : int
-        Vector-field evaluations made.
-    rate : float
-        Controller memory: the rotation rate once the guard has rejected a step, else 0
-        (:func:`~liegroup_int.integrators.controller.rotation_rate`).
-    """
-
-    y: object
-    t: float
-    h: float
-    err_prev: float
-    steps: int
-    rejected: int
-    attempts: int
-    h_min: float
-    h_max: float
-    status: str
-    quadrature: float = 0.0
-    rhs_evals: int = 0
-    rate: float = 0.0
 
 
 class Problem(ABC):
@@ -331,16 +240,15 @@ class ActionProblem(Problem):
     def compiled_kernels(self):
         """The compiled engine's kernels for a ``numba.njit`` ``f`` on ``Sphere()``,
         ``TangentSphere()`` or a power of it, ``Stiefel`` or ``Isospectral`` (single
-        points, exp coordinates; :func:`~.compiled_group.space_problem_kernels`; the SO(n)
-        spaces with their truncated dexpinv series too), else ``None`` (the generic loop)."""
-        from .compiled_group import is_compiled_function, space_problem_kernels
-        from .compiled_son import son_space_kernels
+        points, exp coordinates; :data:`~.compiled_spaces.SPACE_KERNELS`; the SO(n)
+        spaces with their truncated dexpinv series too), else ``None`` (the generic loop).
+        Imported here so that problems that never compile never import numba."""
+        from .compiled_group import is_compiled_function
+        from .compiled_spaces import space_kernels
 
         if self.coordinates != "exp" or not is_compiled_function(self.f):
             return None
-        if self.dexpinv_order is None:
-            return space_problem_kernels(self)
-        return son_space_kernels(self, self.dexpinv_order)
+        return space_kernels(self, self.dexpinv_order)
 
     def vector_field(self, t, y):
         return np.asarray(self.f(t, y), dtype=float)

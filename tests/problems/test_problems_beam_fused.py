@@ -18,7 +18,7 @@ import pytest
 from liegroup_int.integrators import (METHODS, BlowUpError, IntegrationError, Problem, Stats, StepSizeError,
                                       integrate_fixed, resolve_method)
 from liegroup_int.problems.beam import BeamProblem
-from liegroup_int.integrators.engine import compiled_stepper
+from liegroup_int.integrators import stepper_for
 from liegroup_int.problems.beam.kernels_numba import profile_row, profile_value
 from liegroup_int.problems.beam.model import EndLoad, Loads, Profile
 from liegroup_int.scenes import load_scene
@@ -86,10 +86,10 @@ def scene(request):
 
 def test_the_stepper_exists_only_where_it_should(scene):
     _, pb, _ = scene
-    assert compiled_stepper(pb, TAB) is not None
+    assert stepper_for(pb, TAB) is not None
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy",
                         formulation=pb.formulation)
-    assert compiled_stepper(np_pb, TAB) is None
+    assert stepper_for(np_pb, TAB) is None
 
 
 @pytest.mark.parametrize("t0", [0.0, 0.1])  # 0.1 s: every time profile of the scenes is on
@@ -243,13 +243,13 @@ def test_unusual_profiles_fall_back_to_the_generic_loop():
     for prof in (Doubled("step", t_off=1.0), unsorted):
         loads = Loads(end=EndLoad(force=(0.0, 0.0, -100.0), force_profile=prof))
         nb = BeamProblem(pb.space, pb.constants, pb.bcs, loads, pb.initial, backend="numba")
-        assert compiled_stepper(nb, TAB) is None
+        assert stepper_for(nb, TAB) is None
         _, y, stats = integrate_fixed(nb, TAB, (0.0, 3 * dt), nb.initial_state(), dt)
         assert stats.steps == 3 and nb.is_finite(y)
 
 
 def test_default_hook_and_stats():
-    assert Problem.compiled_kernels(None) is None and compiled_stepper(object(), TAB) is None
+    assert Problem.compiled_kernels(None) is None and stepper_for(object(), TAB) is None
     st = Stats()
     st.accept_many(0, np.inf, 0.0)
     assert st.steps == 0 and st.h_min == np.inf and st.h_max == 0.0

@@ -23,7 +23,8 @@ import liegroup_int.integrators.rkmk as rkmk
 from liegroup_int.integrators import (IntegrationError, Problem, StepSizeError, Stats, integrate_adaptive,
                                       resolve_method)
 from liegroup_int.problems.beam import BeamProblem
-from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.integrators import stepper_for
+from liegroup_int.integrators.engine import CompiledStepper
 from liegroup_int.problems.beam.kernels_numba import _newton_schulz
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
@@ -215,10 +216,10 @@ def test_limits_and_rejections_match_the_generic_loop(case, sequential_sums):
 
 def test_the_hook_exists_only_where_it_should():
     pb, _ = _scene("cantilever")
-    assert isinstance(compiled_stepper(pb, resolve_method("rkmk45")), CompiledStepper)
+    assert isinstance(stepper_for(pb, resolve_method("rkmk45")), CompiledStepper)
     with pytest.raises(ValueError, match="no embedded pair"):  # a fixed-step method has no adaptive loop
-        compiled_stepper(pb, resolve_method("rkmk4")).advance_to(0.0, pb.initial_state(), 1.0, 0.1, 1e-4, 0.0,
+        stepper_for(pb, resolve_method("rkmk4")).advance_to(0.0, pb.initial_state(), 1.0, 0.1, 1e-4, 0.0,
                                                                    1e-6, 1e-9, 1.0, 10, 1.0, ())
     np_pb = BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend="numpy")
-    assert compiled_stepper(np_pb, resolve_method("rkmk45")) is None
+    assert stepper_for(np_pb, resolve_method("rkmk45")) is None
     assert Problem.compiled_kernels(None) is None

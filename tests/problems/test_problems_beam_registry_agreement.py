@@ -28,7 +28,8 @@ from liegroup_int.integrators import (
     integrate_fixed,
     resolve_method,
 )
-from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.integrators import stepper_for
+from liegroup_int.integrators.engine import CompiledStepper
 from liegroup_int.problems.beam import beam_problem
 from liegroup_int.scenes import KINDS, builtin_names, builtin_path, load_scene
 from liegroup_int.scenes.schema import read_toml
@@ -132,7 +133,7 @@ def scene_pair(request):
 @pytest.mark.parametrize("t0", [0.0, 0.1])  # 0.1 s: every load profile of the built-in scenes is on
 def test_fused_rkmk4_steps_agree_with_the_numpy_backend(scene_pair, t0, advance_calls):
     name, nb, npb, dt = scene_pair
-    assert compiled_stepper(nb, RK4) is not None and compiled_stepper(npb, RK4) is None
+    assert stepper_for(nb, RK4) is not None and stepper_for(npb, RK4) is None
     y0 = npb.action(_random_increment(npb), nb.initial_state())
     snapshot = y0.copy()
     res, stats = {}, {}
@@ -181,7 +182,7 @@ def test_compiled_adaptive_loop_agrees_with_the_numpy_backend(name, advance_call
                                       "integrator.rtol": RTOL, "integrator.atol": ATOL})
     assert sc.integrator.adaptive
     h_cap = info["dt_auto"]  # the stable step, which a run uses as h_max of an adaptive pair
-    assert compiled_stepper(nb, tab) is not None and compiled_stepper(npb, tab) is None
+    assert stepper_for(nb, tab) is not None and stepper_for(npb, tab) is None
     t0, T = 0.1, 40 * h_cap
     y0 = npb.action(_smooth_increment(npb), nb.initial_state())
     got = {}

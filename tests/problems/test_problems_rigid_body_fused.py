@@ -28,7 +28,8 @@ from liegroup_int.integrators import (
 from liegroup_int.integrators.methods import is_commutator_free
 from liegroup_int.integrators.problem import GroupProblem
 from liegroup_int.problems import RigidBody, RigidBodyProblem
-from liegroup_int.integrators.engine import CompiledStepper, compiled_stepper
+from liegroup_int.integrators import stepper_for
+from liegroup_int.integrators.engine import CompiledStepper
 
 TOL = 1e-13
 FREE = RigidBody(inertia=(1.0, 2.0, 2.5))
@@ -92,7 +93,7 @@ def _rel(a, b):
 def test_the_stepper_exists_only_where_it_should():
     pb = TOP.problem()
     assert isinstance(pb, RigidBodyProblem) and isinstance(pb, GroupProblem)
-    assert isinstance(compiled_stepper(pb, TAB), CompiledStepper)
+    assert isinstance(stepper_for(pb, TAB), CompiledStepper)
 
     class Damped(RigidBody):  # user-defined torque: the generic path must run it
         def vector_field(self, t, y):
@@ -100,16 +101,16 @@ def test_the_stepper_exists_only_where_it_should():
             out[..., 3:] -= 0.1 * self.split(y)[1]
             return out
 
-    assert compiled_stepper(Damped(inertia=(1.0, 2.0, 2.5)).problem(), TAB) is None
+    assert stepper_for(Damped(inertia=(1.0, 2.0, 2.5)).problem(), TAB) is None
     replaced = TOP.problem()
     replaced.f = lambda t, y: TOP.vector_field(t, y)
-    assert compiled_stepper(replaced, TAB) is None
+    assert stepper_for(replaced, TAB) is None
 
     class Custom(RigidBodyProblem):
         def end_step(self, y):
             return y
 
-    assert compiled_stepper(Custom(TOP), TAB) is None
+    assert stepper_for(Custom(TOP), TAB) is None
 
 
 @pytest.mark.parametrize("batch", [(), (5,), (2, 3)], ids=["single", "batch5", "batch2x3"])
@@ -173,7 +174,7 @@ def test_errors_match_the_generic_loop(case):
     else:
         body, y0, dt, T, max_angle, expected = TOP, _states(TOP), 0.1, 5.0, 0.05, StepSizeError
     if max_angle is None:  # just above the first step's increment angle
-        first = compiled_stepper(TOP.problem(), TAB).advance(0.0, y0, dt, dt, 1, 0.0)
+        first = stepper_for(TOP.problem(), TAB).advance(0.0, y0, dt, dt, 1, 0.0)
         assert first.status == "angle" and first.steps == 0
         max_angle = first.angle * 1.02
     got = {}
@@ -192,7 +193,7 @@ def test_errors_match_the_generic_loop(case):
 
 
 def test_advance_contract():
-    st = compiled_stepper(TOP.problem(), TAB)
+    st = stepper_for(TOP.problem(), TAB)
     y0 = _states(TOP, (2,))
     res = st.advance(0.0, y0, 0.1, 0.03, 4, 1.0)  # steps end at 0.03, 0.06, 0.09, 0.1
     assert res.status == "ok" and res.steps == 4 and res.t == 0.1 and res.y.shape == (2, 12)
