@@ -496,17 +496,27 @@ def _sized(scene: Scene, pb: BeamProblem) -> BeamProblem:
         y0 = pb.initial_state()
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
+    key = (scene.kind, repr(sorted(scene.params.items())))
     try:
-        rep = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
+        rep = _SIZED[key] if key in _SIZED else size_kelvin_voigt(pb.with_kelvin_voigt, y0)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
                          f"({describe_formulation(pb.formulation)}, p={scene['space.degree']}, "
                          f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
                          + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
                             else "") + ", or give an explicit retardation time") from None
+    if len(_SIZED) >= 32:
+        _SIZED.pop(next(iter(_SIZED)))
+    _SIZED[key] = rep
     pb = pb.with_kelvin_voigt(rep.tau)
     pb.damping_report = rep
     return pb
+
+
+#: Damping sized in this process, by the scene's own keys (everything that defines the
+#: problem; not dt, t_end or outputs): a study, a resume or a rerun of the same beam sizes
+#: it once (each sizing is one or more dense spectra).
+_SIZED: dict = {}
 
 
 def check(scene: Scene) -> None:
