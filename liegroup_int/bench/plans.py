@@ -91,7 +91,7 @@ class Plan:
             raise ValueError(f"plan {self.scene}: dt_fractions must lie in (0, 1], got {self.dt_fractions}")
 
 
-#: Built-in plans (the issue's scenes: cantilever over 0.05 s, pendulum over 1 s). Every
+#: Built-in plans (cantilever over 0.05 s, pendulum over 1 s). Every
 #: discretization here is stable at rest in primal collocation (max Re lambda of the
 #: linearized operator < 1e-3 1/s); some nearby ones are not (cantilever p = 8, n_ctrl = 61
 #: or 71: +1e4 1/s; see docs/verification.md, "Stability of the semi-discretization"). Mixed

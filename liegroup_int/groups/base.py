@@ -137,7 +137,7 @@ class LieGroup(ABC):
         return self.compose(self.inverse(g), h)
 
     def retract(self, xi: np.ndarray, g: np.ndarray) -> np.ndarray:
-        """Left action of an algebra increment: ``exp(xi) * g`` (method.md section 2)."""
+        """Left action of an algebra increment: ``exp(xi) * g`` (docs/theory.md, section "Conventions")."""
         return self.compose(self.exp(xi), g)
 
     def magnitude(self, g: np.ndarray) -> np.ndarray:

@@ -26,7 +26,7 @@ Definitions (theta = |xi|)::
     E = (t^2 + 2 cos t - 2)/(2 t^4)  SE(3) Jacobian block Q
     F = (2 t - 3 sin t + t cos t)/(2 t^5)
     B1 = B'(t)/t = (t sin t + 2 cos t - 2)/t^4      derivative of dexp along a curve
-    C1 = C'(t)/t = (3 sin t - 2 t - t cos t)/t^5     (method.md 3b: K_s update)
+    C1 = C'(t)/t = (3 sin t - 2 t - t cos t)/t^5     (K_s update, docs/theory.md section 3)
 
 ``B1`` and ``C1`` lose about ``24 eps / t^4`` and ``90 eps / t^4`` to cancellation in
 closed form (5e-15 and 2e-14 at 1 rad), which is why the curvature-derivative update of the

@@ -1,4 +1,4 @@
-"""Explicit RK/RKMK integrators on any problem plugin (method.md section 2)."""
+"""Explicit RK/RKMK integrators on any problem plugin (docs/theory.md section 2)."""
 
 from .api import integrate
 from .drivers import MAX_INCREMENT_ANGLE, initial_step, integrate_adaptive, integrate_fixed, stepper_for

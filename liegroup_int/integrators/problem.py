@@ -1,4 +1,4 @@
-"""The RKMK plugin contract (method.md section 2, homogeneous-space form).
+"""The RKMK plugin contract (docs/theory.md section 2, homogeneous-space form).
 
 A problem supplies
 

@@ -1,4 +1,4 @@
-"""One explicit RKMK step as small pure functions (method.md section 2).
+"""One explicit RKMK step as small pure functions (docs/theory.md section 2).
 
 ::
 

@@ -1,7 +1,7 @@
 """Property tests of the Lie group layer, written once and run on every group.
 
 Groups: SO3, SE3, R1, R3, SO3 x R3, SE3 x SO3 x R2, SO3^4, SE3^2 (see
-``test_groups_strategies.GROUPS``). Conventions (method.md section 1): left increments,
+``test_groups_strategies.GROUPS``). Conventions (docs/theory.md, section "Conventions"): left increments,
 ``hat(a) @ h == cross(a, h)``, and ``dexp`` is the left-trivialized derivative
 ``d/dt exp(xi(t)) = hat(dexp(xi, xi')) @ exp(xi(t))``.
 

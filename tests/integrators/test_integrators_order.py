@@ -42,7 +42,8 @@ def test_fixed_step_order(method, reference):
     errs = [np.abs(integrate(TOP.problem(), Y0, (0.0, T), method=method, dt=h).y_final - reference).max() for h in hs]
     assert min(errs) > 1e-11, f"{method}: errors {errs} too close to round-off to fit an order"
     slope = fitted_order(hs, errs)
-    # 0.3: the tolerance for a fit over three steps in the asymptotic range
+    # 0.3: the tolerance of the time-order studies (docs/verification.md) for a fit over three
+    # steps in the asymptotic range
     assert abs(slope - order) < 0.3, f"{method}: fitted order {slope:.3f}, errors {errs}"
 
 

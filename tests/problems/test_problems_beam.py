@@ -112,12 +112,13 @@ def test_spectrum_at_rest_is_imaginary(name, expected):
     # sqrt(G A k / rho I) of the Timoshenko beam, which no mesh removes (1.56e4 and 1.16e6 1/s)
     c = pb.constants
     assert lam >= np.sqrt(c.CN[0] / c.Jm[0])
-    # regression pin, not derived: the values method.md 3b records for p=4, n_ctrl=31
-    # (~3.1e4 pendulum, ~2.4e6 cantilever, about twice the cut-off), +-2 %
+    # regression pin, not derived: the values docs/theory.md section 4 records for p=4,
+    # n_ctrl=31 (~3.1e4 pendulum, ~2.4e6 cantilever, about twice the cut-off), +-2 %
     assert abs(lam / expected - 1) < 0.02
     # purely imaginary up to the finite-difference error of the Jacobian (~1e-6 relative);
     # for the hinged pendulum this is also the check of the s = 0 Neumann sign: written
-    # (m_c - m) instead of (m_c + m) it gets a real positive eigenvalue (method.md 3)
+    # (m_c - m) instead of (m_c + m) it gets a real positive eigenvalue
+    # (docs/theory.md section 6, "Neumann ends")
     assert np.abs(ev.real).max() < 1e-6 * lam
 
 

@@ -191,8 +191,9 @@ def test_pendulum_runs_past_the_collocation_blow_up():
     """p = 4, n_ctrl = 21, undamped: primal collocation blows up at 1.54 s
     (docs/verification.md); the Galerkin pendulum swings through 3 s with its energy kept
     to 1e-4 of the largest kinetic energy (measured 3.7e-5, a loss: RKMK4 at |lambda| h = 2
-    damps the high modes that the axial compression bursts excite; the same planar
-    collocation drifts by more than the whole kinetic energy by 2 s, stability.md)."""
+    damps the high modes that the axial compression bursts excite; collocation, whose
+    semi-discretization does not conserve energy, feeds them instead: docs/theory.md
+    section 16)."""
     pb = galerkin("pendulum", **{"space.n_ctrl": 21})
     y0 = pb.initial_state()
     dt = 2.0 / spectral_radius(pb, 0.0, y0)

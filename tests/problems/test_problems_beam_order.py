@@ -2,8 +2,8 @@
 
 Errors are measured on the velocity control values at the final time, against RKMK6 at
 |lambda|max h = 0.05. Each method is fitted over three steps in its asymptotic range
-(method.md 3b): |lambda|max h <= 0.3, except RKMK6, whose error at h <= 0.3/|lambda| is
-below the velocity round-off floor (~2e-10: second derivatives of positions amplify the
+(docs/theory.md section 4): |lambda|max h <= 0.3, except RKMK6, whose error at
+h <= 0.3/|lambda| is below the velocity round-off floor (~2e-10: second derivatives of positions amplify the
 rounding of c); it is fitted at |lambda| h in [0.3, 0.6], where its weak growth
 (1.3e-3 y^8 per step) changes amplitudes by < 12% over the run. The explicit midpoint rule
 (growth y^4/8 per step) and Kutta's RK3 (damping y^4/24 per step) saturate the top modes

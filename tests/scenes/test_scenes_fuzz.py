@@ -64,8 +64,8 @@ def test_loader_gives_scene_or_one_line_error(given_keys):
 @pytest.mark.parametrize("over, key", [({"section.d": 1.157920892373162e+77}, "section.d"),
                                        ({"section.shape": "square", "section.t": 1e200}, "section.t")])
 def test_overflowing_section_is_one_line_error(over, key):
-    """A size whose section constants overflow a float (found by the fuzz test above: it
-    used to raise OverflowError) is refused naming the key, once."""
+    """A size whose section constants overflow a float (a case the fuzz test above finds:
+    unguarded, it raises OverflowError) is refused naming the key, once."""
     with pytest.raises(SceneError) as err:
         load_scene("pendulum", over)
     msg = str(err.value)
