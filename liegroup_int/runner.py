@@ -308,12 +308,11 @@ def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | No
 
 def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None,
                claim: Callable[[Path], None] | None = None) -> RunResult:
-    """Integrate ``scene`` and write its results into ``out_dir``.
+    """Integrate ``scene`` and write its results into ``out_dir``: start (build, checks),
+    outputs, warm-up, time loop, summary, then plots.
 
     Parameters
     ----------
-    scene : Scene
-    out_dir : Path
     quiet : bool
         No progress bar.
     resume : dict, optional
@@ -331,51 +330,93 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     """
     out_dir = Path(out_dir)
     clock0 = time.perf_counter()
-    sim = KINDS[scene.kind].build(scene)
-    spec = scene.integrator
-    dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
-    tab = resolve_method(spec.method)
-    t0, y0, stats = 0.0, sim.y0, Stats()
-    every = record_interval(scene, dt)
-    e0 = None
-    if resume is not None:
-        t0, y0 = resume["t"], sim.from_arrays(resume["state"])
-        every = resume["meta"]["every"]
-        e0 = resume["meta"].get("energy0")
-        st = resume["stats"]
-        stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
-                      wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
-                      quadrature=st.get("quadrature", 0.0), controller=resume["meta"].get("controller"))
-        if scene.t_end <= t0:
-            raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
+    start = _start(scene, resume)
     # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
     # step or a spurious growing mode at rest
-    guard_facts, guard_warnings = start_checks(scene, sim, tab, dt, t0, y0)
-    if dt is not None and scene.output.every is not None and scene.output.every < dt * (1 - 1e-9):
-        n_out = int(round((scene.t_end - t0) / every))
-        guard_warnings = list(guard_warnings) + [
-            f"{scene.source}: output.every = {scene.output.every:g} s is below the step dt = {dt:g} s: one "
-            f"output per step, {n_out} outputs"
-            + (f" (ParaView: {n_out} VTU files)" if scene.output.paraview and sim.frames is not None else "")]
-    for w in guard_warnings:
+    guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
+    warnings = list(warnings) + _output_warnings(scene, start)
+    for w in warnings:
         print(f"warning: {w}", file=sys.stderr)
     if claim is not None:
         claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    t_out = output_times(scene.t_end, every)
-    t_out = t_out[t_out > t0 + 1e-9 * every]
-    history = out_dir / "history.csv"
-    columns = sim.info.get("columns")
-    if resume is not None and history.exists():
-        _truncate_csv(history, t0 + 1e-9 * every)
-    balance = None
-    if sim.conserved is not None:
-        if e0 is None:
-            e0 = float(sim.conserved(y0))
-        balance = EnergyBalance(sim.conserved, stats, e0, scene.guard.energy_balance,
-                                scale=resume["meta"].get("energy_scale", 0.0) if resume is not None else 0.0)
+    outs = _outputs(scene, start, out_dir, resume)
+    summary = _summary_head(scene, start, resume, guard_facts, warnings)
+    compile_s = warm_up(start.sim.problem, start.tab, start.t0, start.y0, start.dt)
+    if compile_s > 2.0 and not quiet:
+        print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
+    t_loop = time.perf_counter()
+    end = _integrate(scene, start, outs, out_dir, quiet, resumed=resume is not None)
+    loop_s = time.perf_counter() - t_loop
+    summary.update(_summary_tail(scene, start, outs, end))
+    if end.status != "ok":
+        summary["wall_time_s"] = loop_s
+    summary["timing"] = {
+        "compile_s": compile_s,  # the compiled step loop: numba compilation, or loading it from the cache
+        "setup_s": t_loop - clock0 - compile_s,  # scene, space, damping sizing, dt = "auto", guards, writers
+        "integrate_s": loop_s - outs.output_s[0],  # steps (first call: numba compilation or cache load)
+        "output_s": outs.output_s[0],  # history, HDF5, ParaView, checkpoints at output times
+        "plots_s": 0.0,  # drawn after this summary is written (then rewritten with their time)
+    }
+    summary["plots"] = []
+    # the summary is complete before the plots: a slow or killed plot loses nothing computed
+    write_json(out_dir / "summary.json", summary)
+    if scene.output.plots:
+        _plots(scene, start, outs, out_dir, summary)
+    if end.error is not None:
+        exc = RunError(end.error + f" (outputs up to t={outs.ckpt.t_saved if end.status == 'interrupted' else end.t:.6g}"
+                       f" are in {out_dir})")
+        exc.interrupted = end.status == "interrupted"
+        raise exc
+    return RunResult(out_dir, summary, outs.history)
+
+
+@dataclass
+class _Start:
+    """What a run starts from: the built problem, its step and method, and the initial (or
+    resumed) time, state, counters, output interval and energy."""
+
+    sim: object
+    dt: float | None
+    tab: object
+    t0: float
+    y0: object
+    stats: Stats
+    every: float
+    e0: float | None
+
+
+def _start(scene: Scene, resume: dict | None) -> _Start:
+    sim = KINDS[scene.kind].build(scene)
+    spec = scene.integrator
+    dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
+    tab = resolve_method(spec.method)
+    if resume is None:
+        return _Start(sim, dt, tab, 0.0, sim.y0, Stats(), record_interval(scene, dt), None)
+    t0, meta, st = resume["t"], resume["meta"], resume["stats"]
+    if scene.t_end <= t0:
+        raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
+    stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
+                  wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
+                  quadrature=st.get("quadrature", 0.0), controller=meta.get("controller"))
+    return _Start(sim, dt, tab, t0, sim.from_arrays(resume["state"]), stats, meta["every"], meta.get("energy0"))
+
+
+def _output_warnings(scene: Scene, start: _Start) -> list[str]:
+    """An output interval below the step: one output per step (and as many VTU files)."""
+    dt = start.dt
+    if dt is None or scene.output.every is None or scene.output.every >= dt * (1 - 1e-9):
+        return []
+    n_out = int(round((scene.t_end - start.t0) / start.every))
+    return [f"{scene.source}: output.every = {scene.output.every:g} s is below the step dt = {dt:g} s: one "
+            f"output per step, {n_out} outputs"
+            + (f" (ParaView: {n_out} VTU files)" if scene.output.paraview and start.sim.frames is not None else "")]
+
+
+def _quantities(scene: Scene, sim, balance) -> dict:
+    """The recorded quantities: the scene's, then those the plugin records for its own keys
+    (beams: output.points); each evaluated once per output, whichever writer asks first."""
     quantities = {}
-    # the scene's quantities, then those the plugin records for its own keys (beams: output.points)
     wanted = list(scene.output.quantities) + [q for q in sim.diagnostics if q not in scene.output.quantities]
     for q in wanted:  # the run's own quantities need its work of the loads
         if q == "energy_balance" and balance is not None:
@@ -384,23 +425,41 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
             quantities[q] = balance.work
         elif q in sim.diagnostics:
             quantities[q] = sim.diagnostics[q]
-    # each quantity once per output, whichever writer asks first
-    quantities = {q: _once_per_output(fn) for q, fn in quantities.items()}
+    return {q: _once_per_output(fn) for q, fn in quantities.items()}
+
+
+@dataclass
+class _Outputs:
+    """The run's writers and observers, in the order they see each output."""
+
+    history: Path
+    writer: HistoryWriter
+    h5: object
+    balance: EnergyBalance | None
+    ckpt: Checkpointer
+    observers: list
+    last: dict
+    output_s: list
+
+
+def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) -> _Outputs:
+    sim, t0, every = start.sim, start.t0, start.every
+    history = out_dir / "history.csv"
+    if resume is not None and history.exists():
+        _truncate_csv(history, t0 + 1e-9 * every)
+    balance, e0 = None, start.e0
+    if sim.conserved is not None:
+        e0 = float(sim.conserved(start.y0)) if e0 is None else e0
+        balance = EnergyBalance(sim.conserved, start.stats, e0, scene.guard.energy_balance,
+                                scale=resume["meta"].get("energy_scale", 0.0) if resume is not None else 0.0)
+    quantities = _quantities(scene, sim, balance)
+    columns = sim.info.get("columns")
     writer = HistoryWriter(history, quantities, columns, append=resume is not None)
     observers = [writer]
-    h5 = None
-    if scene.output.hdf5:
-        from .io.hdf5 import Hdf5Writer
-
-        attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
-        snap = sim.to_arrays if sim.fields is None else (lambda y: {**sim.to_arrays(y), **sim.fields(y)})
-        h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, snap, attrs, append=resume is not None)
-        if resume is not None:
-            h5.truncate_after(t0 + 1e-9 * every)
+    h5 = _hdf5_writer(scene, sim, out_dir, resume, quantities, columns, t0 + 1e-9 * every)
+    if h5 is not None:
         observers.append(h5)
-    shapes = None
-    # shapes come from the snapshots in results.h5; a run without HDF5 keeps them itself
-    if sim.snapshot is not None and h5 is None:
+    elif sim.snapshot is not None:  # shapes come from results.h5; without it the plugin keeps them
         observers.append(sim.snapshot)
     if scene.output.paraview and sim.frames is not None:
         from .io.paraview import FrameSeriesWriter
@@ -409,14 +468,37 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         if resume is not None:
             pv.resume_after(t0 + 1e-9 * every)
         observers.append(pv)
-    meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": spec.method, "dt": dt,
-            "energy0": e0}
-    ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, stats)
+    meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": scene.integrator.method,
+            "dt": start.dt, "energy0": e0}
+    ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, start.stats)
     if h5 is not None:
         ckpt.flushers.append(h5.flush)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
         observers.insert(1, EnergyGuard(writer, scene.output.blowup_factor, lambda: ckpt.stats))
-    last = {"t": t0, "y": y0}  # the last recorded state, for the failure diagnosis
+    last = {"t": t0, "y": start.y0}  # the last recorded state, for the failure diagnosis
+    observers.append(_remember(last, meta, balance, start.stats))
+    if balance is not None:  # after the writers, so the failing row is on disk
+        observers.append(balance)
+    observers.append(ckpt)
+    return _Outputs(history, writer, h5, balance, ckpt, observers, last, [0.0])
+
+
+def _hdf5_writer(scene: Scene, sim, out_dir: Path, resume: dict | None, quantities: dict, columns, t_keep: float):
+    if not scene.output.hdf5:
+        return None
+    from .io.hdf5 import Hdf5Writer
+
+    attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
+    snap = sim.to_arrays if sim.fields is None else (lambda y: {**sim.to_arrays(y), **sim.fields(y)})
+    h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, snap, attrs, append=resume is not None)
+    if resume is not None:
+        h5.truncate_after(t_keep)
+    return h5
+
+
+def _remember(last: dict, meta: dict, balance, stats: Stats):
+    """Observer: keeps the last recorded state (failure diagnosis) and what a resume needs
+    in the checkpoint's metadata (energy scale, adaptive controller memory)."""
 
     def remember(t, y):
         last["t"], last["y"] = t, y
@@ -425,100 +507,116 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         if stats.controller is not None:  # adaptive runs: resumed runs continue from it
             meta["controller"] = dict(stats.controller)
 
-    observers.append(remember)
-    if balance is not None:  # after the writers, so the failing row is on disk
-        observers.append(balance)
-    observers.append(ckpt)
-    first = [resume is not None]
+    return remember
 
-    output_s = [0.0]  # time spent writing outputs, inside the integration loop
 
-    def observer(t, y):
-        if first[0]:  # a resumed run does not record its starting point again
-            first[0] = False
-            return
-        c = time.perf_counter()
-        for obs in observers:
-            obs(t, y)
-        progress(t, y, stats)
-        output_s[0] += time.perf_counter() - c
-
-    # progress at output times only: no per-step monitor, so compiled problems may run
-    # the steps between two outputs in one call (the compiled engine, Problem.compiled_kernels)
-    progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
-
-    summary = {
+def _summary_head(scene: Scene, start: _Start, resume, guard_facts: dict, warnings: list) -> dict:
+    spec = scene.integrator
+    return {
         "scene": scene.name, "source": scene.source, "problem": scene.kind, "method": spec.method,
-        "tableau": tab.name, "dt": dt, "rtol": spec.rtol, "atol": spec.atol, "t_end": scene.t_end,
-        "version": __version__, "scene_keys": dict(scene.raw), "resumed_from": t0 if resume is not None else None,
-        **sim.info,
+        "tableau": start.tab.name, "dt": start.dt, "rtol": spec.rtol, "atol": spec.atol, "t_end": scene.t_end,
+        "version": __version__, "scene_keys": dict(scene.raw), "resumed_from": start.t0 if resume is not None else None,
+        **start.sim.info,
         **({"guards": guard_facts} if guard_facts else {}),
-        **({"warnings": guard_warnings} if guard_warnings else {}),
+        **({"warnings": warnings} if warnings else {}),
     }
-    old_handlers = _install_signal_handlers(ckpt)
-    t_reached, y_final, status, error = t0, y0, "ok", None
-    compile_s = warm_up(sim.problem, tab, t0, y0, dt)
-    if compile_s > 2.0 and not quiet:
-        print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
-    start = time.perf_counter()
-    setup_s = start - clock0 - compile_s
+
+
+@dataclass
+class _End:
+    """How the integration ended: ``status`` "ok", "interrupted" or "failed", the time
+    reached, the final state (``ok``), the counters and the one-line error."""
+
+    status: str
+    t: float
+    y: object
+    stats: Stats
+    error: str | None
+
+
+def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet: bool, resumed: bool) -> _End:
+    """The time loop with the observers at output times; progress at output times only (no
+    per-step monitor, so a compiled problem runs the steps between two outputs in one call
+    of the engine). Failures are caught, diagnosed and returned, with the files closed."""
+    spec, t0, y0, stats = scene.integrator, start.t0, start.y0, start.stats
+    t_out = output_times(scene.t_end, start.every)
+    t_out = t_out[t_out > t0 + 1e-9 * start.every]
+    progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
+    observer = _observer(outs, progress, stats, skip_first=resumed)
+    old_handlers = _install_signal_handlers(outs.ckpt)
+    end = _End("ok", t0, y0, stats, None)
     try:
-        if dt is not None:
-            t_reached, y_final, stats = integrate_fixed(sim.problem, tab, (t0, t_out[-1]), y0, dt, observer, t_out,
-                                                        stats=stats)
+        if start.dt is not None:
+            t, y, stats = integrate_fixed(start.sim.problem, start.tab, (t0, t_out[-1]), y0, start.dt, observer,
+                                          t_out, stats=stats)
         else:
-            t_reached, y_final, stats = integrate_adaptive(
-                sim.problem, tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6, spec.atol or 1e-9, observer, t_out,
-                h_max=sim.info.get("dt_auto", np.inf), stats=stats,
-            )
-        ckpt.save(t_reached, y_final)
+            t, y, stats = integrate_adaptive(start.sim.problem, start.tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6,
+                                             spec.atol or 1e-9, observer, t_out,
+                                             h_max=start.sim.info.get("dt_auto", np.inf), stats=stats)
+        outs.ckpt.save(t, y)
+        end = _End("ok", t, y, stats, None)
     except Interrupted as exc:
-        status, t_reached = "interrupted", exc.t
-        error = (f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "
-                 f"--resume {out_dir}")
+        end = _End("interrupted", exc.t, y0, stats,
+                   f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "
+                   f"--resume {out_dir}")
     except IntegrationError as exc:
-        status, error, t_reached = "failed", f"{scene.name}: {exc}", exc.t
-        cause = diagnose(scene, sim, tab, dt, last["t"], last["y"])
-        if cause:
-            error += f"; {cause}"
+        error = f"{scene.name}: {exc}"
+        cause = diagnose(scene, start.sim, start.tab, start.dt, outs.last["t"], outs.last["y"])
+        end = _End("failed", exc.t, y0, stats, error + (f"; {cause}" if cause else ""))
     finally:
         for sig, h in old_handlers.items():
             signal.signal(sig, h)
-        writer.close()
-        if h5 is not None:
-            h5.close()
-        progress.close(t_reached)
-    summary.update({"status": status, "t_reached": t_reached, "history_rows": writer.rows})
-    if balance is not None:
-        summary["energy_balance"] = {"defect": balance.defect, "worst_fraction": balance.worst,
-                                     "energy_scale": balance.scale, "work": stats.quadrature,
-                                     "tolerance": scene.guard.energy_balance}
-    summary.update(stats.as_dict())
-    summary["wall_time_s"] = stats.wall_time_s if status == "ok" else time.perf_counter() - start
-    if status == "ok":
-        summary["final"] = sim.final_state(y_final) | {"t": t_reached}
+        outs.writer.close()
+        if outs.h5 is not None:
+            outs.h5.close()
+        progress.close(end.t)
+    return end
+
+
+def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool):
+    """Calls every observer at an output time and times it; a resumed run does not record
+    its starting point again."""
+    first = [skip_first]
+
+    def observer(t, y):
+        if first[0]:
+            first[0] = False
+            return
+        c = time.perf_counter()
+        for obs in outs.observers:
+            obs(t, y)
+        progress(t, y, stats)
+        outs.output_s[0] += time.perf_counter() - c
+
+    return observer
+
+
+def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dict:
+    tail = {"status": end.status, "t_reached": end.t, "history_rows": outs.writer.rows}
+    if outs.balance is not None:
+        b = outs.balance
+        tail["energy_balance"] = {"defect": b.defect, "worst_fraction": b.worst, "energy_scale": b.scale,
+                                  "work": end.stats.quadrature, "tolerance": scene.guard.energy_balance}
+    tail.update(end.stats.as_dict())
+    tail["wall_time_s"] = end.stats.wall_time_s
+    if end.status == "ok":
+        tail["final"] = start.sim.final_state(end.y) | {"t": end.t}
     else:
-        summary["error"] = error
-    if sim.snapshot is not None and scene.output.plots:
-        shapes = _shapes(sim.snapshot, out_dir / "results.h5" if h5 is not None else None)
-    loop_s = time.perf_counter() - start
+        tail["error"] = end.error
+    return tail
+
+
+def _plots(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, summary: dict) -> None:
+    """The run's plots, drawn after the summary is written; their names and time are added
+    to it."""
     c = time.perf_counter()
-    scale = balance.scale if balance is not None else 0.0
-    summary["plots"] = write_plots(out_dir, scene, history, shapes, scale) if scene.output.plots else []
-    summary["timing"] = {
-        "compile_s": compile_s,  # the compiled step loop: numba compilation, or loading it from the cache
-        "setup_s": setup_s,  # scene, space, damping sizing, dt = "auto", guards, writers
-        "integrate_s": loop_s - output_s[0],  # steps (first call: numba compilation or cache load)
-        "output_s": output_s[0],  # history, HDF5, ParaView, checkpoints at output times
-        "plots_s": time.perf_counter() - c,
-    }
+    shapes = None
+    if start.sim.snapshot is not None:
+        shapes = _shapes(start.sim.snapshot, out_dir / "results.h5" if outs.h5 is not None else None)
+    scale = outs.balance.scale if outs.balance is not None else 0.0
+    summary["plots"] = write_plots(out_dir, scene, outs.history, shapes, scale)
+    summary["timing"]["plots_s"] = time.perf_counter() - c
     write_json(out_dir / "summary.json", summary)
-    if error is not None:
-        exc = RunError(error + f" (outputs up to t={ckpt.t_saved if status == 'interrupted' else t_reached:.6g} are "
-                       f"in {out_dir})")
-        exc.interrupted = status == "interrupted"
-        raise exc
-    return RunResult(out_dir, summary, history)
 
 
 #: Scene keys a resumed run may change: the span and what is written, not the model, the

@@ -132,4 +132,4 @@ def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = 
             ax.set_xlabel("s [m]", fontsize=8), ax.set_ylabel("rotation [-]", fontsize=8)
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
-    return save_figure(fig, path, title)
+    return save_figure(fig, path, title, hspace=0.55, wspace=0.4)

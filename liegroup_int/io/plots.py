@@ -16,13 +16,20 @@ def _pyplot():
     return plt
 
 
-def save_figure(fig, path: Path, title: str = "") -> Path:
-    """Title, tight layout, PNG/PDF at 110 dpi, and the figure closed."""
+def save_figure(fig, path: Path, title: str = "", hspace: float = 0.12, wspace: float = 0.3) -> Path:
+    """Title, margins, PNG/PDF at 110 dpi, and the figure closed.
+
+    The margins are fixed in inches (room for tick labels and axis labels of the size these
+    figures use), not measured: ``tight_layout`` draws the figure once more to measure it and
+    took 60-80 % of a run's plotting time."""
     import matplotlib.pyplot as plt
 
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
+    w, h = fig.get_size_inches()
+    top = 0.45 + (0.3 if any(ax.get_title() for ax in fig.axes) else 0.0)  # room for axes titles
+    fig.subplots_adjust(left=0.85 / w, right=1 - 0.15 / w, bottom=0.5 / h, top=1 - top / h, hspace=hspace,
+                        wspace=wspace)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
