@@ -351,13 +351,7 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     summary.update(_summary_tail(scene, start, outs, end))
     if end.status != "ok":
         summary["wall_time_s"] = loop_s
-    summary["timing"] = {
-        "compile_s": compile_s,  # the compiled step loop: numba compilation, or loading it from the cache
-        "setup_s": t_loop - clock0 - compile_s,  # scene, space, damping sizing, dt = "auto", guards, writers
-        "integrate_s": loop_s - outs.output_s[0],  # steps (first call: numba compilation or cache load)
-        "output_s": outs.output_s[0],  # history, HDF5, ParaView, checkpoints at output times
-        "plots_s": 0.0,  # drawn after this summary is written (then rewritten with their time)
-    }
+    summary["timing"] = _timing(compile_s, t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
     # the summary is complete before the plots: a slow or killed plot loses nothing computed
     write_json(out_dir / "summary.json", summary)
@@ -369,6 +363,16 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         exc.interrupted = end.status == "interrupted"
         raise exc
     return RunResult(out_dir, summary, outs.history)
+
+
+def _timing(compile_s: float, setup_s: float, loop_s: float, output_s: float) -> dict:
+    return {
+        "compile_s": compile_s,  # the compiled step loop: numba compilation, or loading it from the cache
+        "setup_s": setup_s,  # scene, space, damping sizing, dt = "auto", guards, writers
+        "integrate_s": loop_s - output_s,  # steps (first call: numba compilation or cache load)
+        "output_s": output_s,  # history, HDF5, ParaView, checkpoints at output times
+        "plots_s": 0.0,  # drawn after the summary is first written (then rewritten with their time)
+    }
 
 
 @dataclass
