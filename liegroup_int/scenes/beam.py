@@ -502,9 +502,10 @@ def _sized(scene: Scene, pb: BeamProblem) -> BeamProblem:
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key 'material.kelvin_voigt' = 'auto': {exc} in this discretization "
                          f"({describe_formulation(pb.formulation)}, p={scene['space.degree']}, "
-                         f"n_ctrl={scene['space.n_ctrl']}); try another space.n_ctrl or degree"
-                         + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal"
-                            else "") + ", or give an explicit retardation time") from None
+                         f"n_ctrl={scene['space.n_ctrl']}); try "
+                         + ('space.formulation = "galerkin" (no spurious growing mode), or '
+                            if pb.formulation != "galerkin" else "")
+                         + "another space.n_ctrl or degree, or give an explicit retardation time") from None
     if len(_SIZED) >= 32:
         _SIZED.pop(next(iter(_SIZED)))
     _SIZED[key] = rep
@@ -685,8 +686,15 @@ def _frames(pb: BeamProblem, fields=()):
 #: (n_ctrl = 125; ~1 s for the eigenvalues on one core).
 PROBE_MAX_UNKNOWNS = 1500
 
-REMEDY = ('try material.kelvin_voigt = "auto" (the least damping that removes growth at the start) or a larger '
+#: What to try when a collocation run grows a mode: the weak form first (it finishes the runs
+#: collocation cannot), then the least damping, then another mesh.
+REMEDY = ('try space.formulation = "galerkin" (energy-conserving weak form: no spurious growing mode, no locking), '
+          'or material.kelvin_voigt = "auto" (the least damping that removes growth at the start) or a larger '
           'value, or another space.n_ctrl (docs/verification.md, "Stability maps")')
+#: The same for the weak form, whose spectrum at rest is clean: what grows is the motion itself
+#: or a step the mesh's top modes do not allow.
+REMEDY_GALERKIN = ("try a finer space.n_ctrl (to resolve the motion), a smaller integrator.dt, or "
+                   'material.kelvin_voigt > 0 to damp the top modes (docs/verification.md, "Stability maps")')
 
 
 def describe_formulation(formulation: str) -> str:
@@ -710,9 +718,11 @@ def stability(scene: Scene, pb: BeamProblem) -> Stability:
     def at_rest(y):
         return not (np.any(y.v) or np.any(y.w))
 
-    remedy_real = ("strain-rate damping does not act on a real mode: try another space.degree or space.n_ctrl"
-                   + (', or space.formulation = "mixed" (locking-free)' if pb.formulation == "primal" else ""))
-    return Stability(describe=describe, remedy=REMEDY, remedy_real=remedy_real, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
+    galerkin = pb.formulation == "galerkin"
+    remedy_real = ("strain-rate damping does not act on a real mode: try "
+                   + ("another" if galerkin else 'space.formulation = "galerkin" (locking-free), or another')
+                   + " space.degree or space.n_ctrl")
+    return Stability(describe=describe, remedy=REMEDY_GALERKIN if galerkin else REMEDY, remedy_real=remedy_real, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
                      growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS, sized=pb.damping_report)
 
 
