@@ -14,13 +14,15 @@ and output).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .bspline import band_widths
 from .collocation import CollocationSpace
 from .quadrature import exact_mass_rule, gauss_points, patch_rule
 
-__all__ = ["GalerkinSpace", "BandedSPD", "gauss_points"]
+__all__ = ["GalerkinSpace", "BandedSPD", "StrainJacobian", "gauss_points", "reference_strain_jacobian"]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -193,6 +195,36 @@ class GalerkinSpace:
         import scipy.linalg
 
         return scipy.linalg.solve(self.point_mass, self.B0.T @ (self.w_full[:, None] * values), assume_a="pos")
+
+
+class StrainJacobian(NamedTuple):
+    """Linearized strains at the points about the reference state, per unit control value
+    of the position increment ``eta`` and the rotation increment ``Theta``.
+
+    Attributes
+    ----------
+    gamma, kappa : numpy.ndarray, shape (m, 3, 2, n, 3)
+        ``d Gamma_k[a] / d x[b, i, d]`` and ``d K_k[a] / d x[b, i, d]`` with ``b = 0`` for
+        ``eta`` and ``b = 1`` for ``Theta`` (material strains, ``R = R0 exp(hat(B0 Theta))``).
+    """
+
+    gamma: np.ndarray
+    kappa: np.ndarray
+
+
+def reference_strain_jacobian(gs: "GalerkinSpace") -> StrainJacobian:
+    """:class:`StrainJacobian` of ``gs``: ``dGamma = R0^T B1 eta + Gamma0 x B0 Theta`` and
+    ``dK = B1 Theta + K0 x B0 Theta`` (the Hessian of a quadrature strain energy at rest
+    is ``J^T diag(w C) J``)."""
+    m, n = gs.B0.shape
+    eye = np.eye(3)
+    g = np.zeros((m, 3, 2, n, 3))
+    k = np.zeros((m, 3, 2, n, 3))
+    g[:, :, 0] = np.einsum("kda,ki->kaid", gs.R0, gs.B1)
+    g[:, :, 1] = np.einsum("kda,ki->kaid", np.cross(gs.gamma0[:, None, :], eye[None]), gs.B0)
+    k[:, :, 1] = (np.einsum("da,ki->kaid", eye, gs.B1)
+                  + np.einsum("kda,ki->kaid", np.cross(gs.K0[:, None, :], eye[None]), gs.B0))
+    return StrainJacobian(g, k)
 
 
 def _check_definite(A: np.ndarray, rule: str) -> None:

@@ -12,8 +12,9 @@ Registered rules (:data:`RULES`):
 * ``"gauss"``: ``p + 1`` Gauss points per knot interval for bending, ``p`` for the axial
   and shear terms (reduced integration against shear and membrane locking);
 * ``"gauss-full"``: ``p + 1`` per interval for both;
-* ``"gauss-p"``, ``"gauss-3"``, ``"gauss-2"``: ``p``, 3 or 2 Gauss points per interval,
-  shared by both sets of terms;
+* ``"gauss-p"``, ``"gauss-pm1"``, ``"gauss-2"``: ``p``, ``p - 1`` or 2 Gauss points per
+  interval, shared by both sets of terms (``p`` points integrate the bending energy of a
+  straight beam at rest exactly and the axial and shear terms as ``"gauss"``);
 * ``"greville"``: one point per control point, at the Greville abscissae, with the weights
   that integrate every basis function exactly (Greville quadrature in the sense of Zou et
   al., CMAME 380, 2021).
@@ -114,7 +115,7 @@ RULES: dict[str, Callable] = {
     "gauss": _gauss_per_interval(lambda p: (p + 1, p)),
     "gauss-full": _gauss_per_interval(lambda p: (p + 1, p + 1)),
     "gauss-p": _gauss_per_interval(lambda p: (p, p)),
-    "gauss-3": _gauss_per_interval(lambda p: (3, 3)),
+    "gauss-pm1": _gauss_per_interval(lambda p: (p - 1, p - 1)),
     "gauss-2": _gauss_per_interval(lambda p: (2, 2)),
     "greville": _greville_rule,
 }
@@ -124,7 +125,7 @@ RULE_DESCRIPTIONS = {
     "gauss": "p + 1 Gauss points per knot interval for bending, p for axial and shear",
     "gauss-full": "p + 1 Gauss points per knot interval for every term",
     "gauss-p": "p Gauss points per knot interval for every term",
-    "gauss-3": "3 Gauss points per knot interval for every term",
+    "gauss-pm1": "p - 1 Gauss points per knot interval for every term",
     "gauss-2": "2 Gauss points per knot interval for every term",
     "greville": "one point per control point (Greville abscissae), weights exact for the basis",
 }
