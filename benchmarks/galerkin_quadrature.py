@@ -15,7 +15,11 @@ For each rule of ``space.quadrature`` (liegroup_int.iga.quadrature.RULES):
    n_ctrl = 81), and their log-log slope against the knot span.
 3. **Energy.** The ``pendulum`` (p = 4, n_ctrl = 31, undamped) over 0.2 s, RKMK4 at
    ``|lambda| h = 2``: largest energy drift, and the tip position at 0.2 s against the
-   ``gauss`` rule at n_ctrl = 61 and ``|lambda| h = 0.5``.
+   ``gauss`` rule at n_ctrl = 61 and ``|lambda| h = 0.5``. Then the tip at 0.2 s at
+   ``|lambda| h = 0.5`` for n_ctrl = 11, 21, 41 against the gauss rule at n_ctrl = 81
+   (space convergence), and the in-plane spectrum of the ``rollup`` beam in its static
+   half and full circle (n_ctrl = 21): zero eigenvalues (compare with ``gauss``: the
+   clamp's) and the largest real part.
 4. **Cost.** CPU per RKMK4 step in the compiled engine (numba, pendulum, p = 4), median of
    three runs, for primal collocation and every rule in the same run; and CPU per
    simulated second at ``|lambda| h = 2.26`` (the stable step follows ``|lambda|max``).
@@ -31,7 +35,7 @@ import time
 
 import numpy as np
 
-from liegroup_int.integrators import eigenvalues, integrate_fixed, resolve_method, spectral_radius
+from liegroup_int.integrators import eigenvalues, integrate_fixed, jacobian, resolve_method, spectral_radius
 from liegroup_int.iga.quadrature import RULES
 from liegroup_int.problems.beam.galerkin_linear import energy_nullity, natural_frequencies
 from liegroup_int.scenes import load_scene
@@ -129,6 +133,59 @@ def energy_table(rules) -> None:
               flush=True)
 
 
+def tip_table(rules, sizes) -> None:
+    """Pendulum (p = 4, undamped) tip at 0.2 s, RKMK4 at |lambda| h = 0.5, against the gauss
+    rule at n_ctrl = 81: space convergence."""
+    def tip(rule, n):
+        pb = galerkin("pendulum", rule, 4, n, **{"material.kelvin_voigt": 0.0})
+        y0 = pb.initial_state()
+        return pb.tip(run_pendulum(pb, y0, spectral_radius(pb, 0.0, y0), 0.5)[0])
+
+    ref = tip("gauss", 81)
+    print(f"pendulum tip at 0.2 s, reference (gauss, n_ctrl = 81, |lambda| h = 0.5): {ref}; "
+          f"difference to n_ctrl = 61: {np.linalg.norm(tip('gauss', 61) - ref):.1e} m\n")
+    print("| rule | tip error at 0.2 s [m], n_ctrl " + ", ".join(map(str, sizes)) + " | log-log slope |")
+    print("|---|---|---|")
+    for rule in rules:
+        err = [np.linalg.norm(tip(rule, n) - ref) for n in sizes]
+        slope = np.polyfit(np.log(1.0 / (np.array(sizes) - 4)), np.log(err), 1)[0]
+        print(f"| {rule} | {' '.join(f'{e:.1e}' for e in err)} | {slope:.2f} |", flush=True)
+
+
+def rolled(rule: str, k: float, n: int):
+    """The roll-up (p = 4) under the end couple ``k pi EI / L`` in its static state (the
+    exact arc, positions projected), as benchmarks/galerkin_spectra.py."""
+    from liegroup_int.groups.so3 import exp_so3
+
+    base = galerkin("rollup", rule, 4, n)
+    kap = k * np.pi / base.space.length
+    pb = galerkin("rollup", rule, 4, n, **{"material.kelvin_voigt": 0.0,
+                                            "loads.end.couple": [0.0, 0.0, kap * float(base.CM[0, 0])]})
+    y, s_pts = pb.initial_state(), pb.gs.s
+    y.c = pb.gs.project(np.stack([np.sin(kap * s_pts) / kap, (1.0 - np.cos(kap * s_pts)) / kap, 0.0 * s_pts], axis=1))
+    y.R = exp_so3(np.outer(kap * s_pts, [0.0, 0.0, 1.0])) @ pb.gs.R0
+    y.K = pb.gs.K0 + kap * np.einsum("qji,j->qi", pb.gs.R0, [0.0, 0.0, 1.0])
+    return pb, y, 20.0
+
+
+def rollup_table(rules, n: int = 21) -> None:
+    """In-plane spectrum of the rolled-up beam (conservative): zero eigenvalues and the
+    largest real part, per rule."""
+    print(f"| rule | couple | n_ctrl | residual max abs(v') | in-plane abs(lambda) < 1e-6 max | "
+          f"in-plane max Re / abs(lambda)max | abs(lambda)max |")
+    print("|---|---|---|---|---|---|---|")
+    for rule in rules:
+        for k in (1.0, 2.0):
+            pb, y, t = rolled(rule, k, n)
+            J = jacobian(pb, t, y)
+            idx = np.arange(J.shape[0]).reshape(4, pb.n, 3)
+            inplane = np.concatenate([idx[0, :, :2].ravel(), idx[1, :, 1], idx[2, :, :2].ravel(), idx[3, :, 1]])
+            ei = np.linalg.eigvals(J[np.ix_(inplane, inplane)])
+            lam = float(np.max(np.abs(ei)))
+            print(f"| {rule} | {k:g} pi EI/L | {n} | {np.max(np.abs(pb.vector_field(t, y)[2])):.1e} "
+                  f"| {int(np.sum(np.abs(ei) < 1e-6 * lam))} | {ei.real.max() / lam:.1e} | {lam:.4g} |", flush=True)
+
+
 def step_cost(pb, steps: int) -> tuple[float, float]:
     """CPU per RKMK4 step [us] (median of three) and ``|lambda|max``."""
     y0 = pb.initial_state()
@@ -169,7 +226,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="p = 4 only, n_ctrl 11 21 (cost: 21 61), 500 steps")
     ap.add_argument("--rules", nargs="+", default=list(RULES), choices=list(RULES))
-    ap.add_argument("--skip", nargs="*", default=[], choices=["spectrum", "energy", "cost"])
+    ap.add_argument("--skip", nargs="*", default=[], choices=["spectrum", "energy", "tip", "rollup", "cost"])
     args = ap.parse_args(argv)
     degrees, sizes = ((4,), (11, 21)) if args.quick else ((4, 3, 2), (11, 21, 41))
     cost_sizes, steps = ((21, 61), 500) if args.quick else ((21, 41, 61, 121), 2000)
@@ -178,6 +235,12 @@ def main(argv=None) -> None:
         print()
     if "energy" not in args.skip:
         energy_table(args.rules)
+        print()
+    if "tip" not in args.skip:
+        tip_table(args.rules, sizes)
+        print()
+    if "rollup" not in args.skip:
+        rollup_table(args.rules)
         print()
     if "cost" not in args.skip:
         cost_table(args.rules, cost_sizes, steps)
