@@ -97,7 +97,8 @@ def test_frequencies_converge_at_order_2p():
 
 def test_pendulum_energy_is_conserved():
     """Pendulum, p = 4, n_ctrl = 31, undamped, RKMK4 at |lambda| h = 2 over 0.2 s: the
-    energy drifts by 3.1e-11 J, as with the gauss rule (benchmarks/galerkin_quadrature.py)."""
+    energy drifts by 3.1e-11 J (largest kinetic energy 0.14 J), as with the gauss rule
+    (benchmarks/galerkin_quadrature.py)."""
     pb = galerkin("pendulum", RULE, 4, 31, **{"material.kelvin_voigt": 0.0})
     y0 = pb.initial_state()
     E0, rec = pb.energy(y0), []
