@@ -1,42 +1,34 @@
 """Quadrature space of a beam centreline for the Galerkin (weak) form.
 
-The trial and test functions are the collocation space's basis; integrals are sums over
-Gauss points, ``p + 1`` per knot interval (exact for the mass matrix of a straight beam).
-With ``reduced = True`` the axial and shear terms use ``p`` points per interval instead
-(reduced integration against shear and membrane locking).
+The trial and test functions are the collocation space's basis; the strain energy and the
+terms that follow the rotations are sums over the points of a quadrature rule
+(:mod:`.quadrature`: by default ``p + 1`` Gauss points per knot interval for bending and
+``p`` for the axial and shear terms). The consistent mass matrix is integrated exactly
+(``p + 1`` Gauss points per interval), whatever the rule.
 
 Fields that are not splines (rotations, curvatures) live at the *points* of this space:
-the Gauss points of both rules, sorted along the beam, plus the two ends (weight 0;
-they carry the end sections' rotations for end loads, reactions and output).
+the points of the rule, sorted along the beam, plus the two ends unless the rule has a
+point there (weight 0; they carry the end sections' rotations for end loads, reactions
+and output).
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
 from .bspline import band_widths
 from .collocation import CollocationSpace
+from .quadrature import exact_mass_rule, gauss_points, patch_rule
 
-__all__ = ["GalerkinSpace", "BandedSPD", "gauss_points"]
+__all__ = ["GalerkinSpace", "BandedSPD", "StrainJacobian", "gauss_points", "reference_strain_jacobian"]
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.ascontiguousarray(a)
     a.setflags(write=False)
     return a
-
-
-def gauss_points(knots, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre points and weights in parameter space, ``n`` per non-empty knot interval.
-
-    Returns
-    -------
-    u, w : numpy.ndarray, shape (n_el * n,)
-    """
-    kv = np.unique(np.asarray(knots, dtype=float))
-    x, gw = np.polynomial.legendre.leggauss(int(n))
-    a, b = kv[:-1, None], kv[1:, None]
-    return (0.5 * (b - a) * x + 0.5 * (a + b)).ravel(), (0.5 * (b - a) * gw).ravel()
 
 
 class BandedSPD:
@@ -82,28 +74,23 @@ class BandedSPD:
         return self._solve((self.factor, False), b, check_finite=False)
 
 
-def _patch_points(space: CollocationSpace, reduced: bool) -> dict:
+def _patch_points(space: CollocationSpace, rule: str) -> dict:
     """Points, weights, basis and reference frames of one patch (local parameter)."""
-    p = space.degree
-    knots = space.curve.knots
-    uf, wf = gauss_points(knots, p + 1)
-    parts = [(uf, wf, np.zeros_like(wf))]
-    if reduced:
-        ur, wr = gauss_points(knots, p)
-        parts.append((ur, np.zeros_like(wr), wr))
-    parts.append((np.array([0.0, 1.0]), np.zeros(2), np.zeros(2)))
-    u = np.concatenate([x[0] for x in parts])
-    wb = np.concatenate([x[1] for x in parts])
-    wa = np.concatenate([x[2] for x in parts])
+    r = patch_rule(space, rule)
+    ends = np.array([x for x in (0.0, 1.0) if not np.any(r.u == x)])
+    u = np.concatenate([r.u, ends])
+    wb = np.concatenate([r.w_bending, np.zeros(ends.size)])
+    wa = np.concatenate([r.w_axial, np.zeros(ends.size)])
     order = np.argsort(u, kind="stable")
     u, wb, wa = u[order], wb[order], wa[order]
     basis = space.basis_s(u)
-    jac = np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
     R0, K0, _ = space.frame(u)
-    t = space.curve.evaluate(u, 1)[1] / jac[:, None]
-    return {"u": u, "B0": basis[0], "B1": basis[1], "w_full": wb * jac,
-            "w_axial": (wa if reduced else wb) * jac, "R0": R0, "K0": K0,
-            "gamma0": np.einsum("nji,nj->ni", R0, t), "s": space.arc_length(u)}
+    c_u = space.curve.evaluate(u, 1)[1]
+    t = c_u / np.linalg.norm(c_u, axis=1)[:, None]
+    um, wm = exact_mass_rule(space)
+    return {"u": u, "B0": basis[0], "B1": basis[1], "w_full": wb, "w_axial": wa, "R0": R0, "K0": K0,
+            "gamma0": np.einsum("nji,nj->ni", R0, t), "s": space.arc_length(u),
+            "mass_basis": space.basis_s(um)[0], "mass_weights": wm}
 
 
 def _block_diag(blocks) -> np.ndarray:
@@ -117,7 +104,7 @@ def _block_diag(blocks) -> np.ndarray:
 
 
 class GalerkinSpace:
-    """Gauss points, weights and basis matrices of a collocation space's basis.
+    """Quadrature points, weights and basis matrices of a collocation space's basis.
 
     Parameters
     ----------
@@ -125,20 +112,22 @@ class GalerkinSpace:
         Basis and reference geometry; a :class:`~liegroup_int.iga.patches.PatchedSpace`
         (a chain of members) gives each patch its own points, in chain order, with the
         global parameter and arc length of the chain.
-    reduced : bool
-        ``p`` Gauss points per interval for the axial and shear terms (else ``p + 1``).
+    rule : str
+        Quadrature rule of the stiffness, a key of :data:`~liegroup_int.iga.quadrature.RULES`
+        (``"gauss"``: ``p + 1`` Gauss points per interval for bending, ``p`` for the axial
+        and shear terms).
 
     Attributes
     ----------
     u : numpy.ndarray, shape (m,)
-        Parameters of the points (sorted; each patch starts and ends with a point of weight 0).
+        Parameters of the points (sorted; each patch starts and ends with a point at its end).
     s : numpy.ndarray, shape (m,)
         Their reference arc length.
     B0, B1 : numpy.ndarray, shape (m, n)
         Basis values and arc-length derivatives there (block-diagonal over patches).
     w_full, w_axial : numpy.ndarray, shape (m,)
-        Arc-length weights of the full rule (bending, inertia, loads) and of the axial and
-        shear terms (the full or the reduced rule); zero at the other points.
+        Arc-length weights of the bending terms (bending, gyroscopic and distributed loads,
+        projections) and of the axial and shear terms; zero at points outside that set.
     R0 : numpy.ndarray, shape (m, 3, 3)
         Reference material frames; ``K0`` ``(m, 3)`` their curvature, and ``gamma0``
         ``(m, 3)`` = ``R0^T c0_s`` (``e3``).
@@ -147,17 +136,20 @@ class GalerkinSpace:
     patch_ends : tuple of (int, int)
         First and last point of each patch.
     mass : numpy.ndarray, shape (n, n)
-        ``M_ij = int N_i N_j ds`` (full rule), banded with half-bandwidth ``p``.
+        ``M_ij = int N_i N_j ds`` (exact rule, whatever ``rule``), banded with half-bandwidth ``p``.
+    point_mass : numpy.ndarray, shape (n, n)
+        ``sum_k w_k N_i(u_k) N_j(u_k)`` with the bending weights: the matrix of
+        :meth:`project` (the rotation increment's projection); positive definite (checked).
     """
 
-    def __init__(self, space, reduced: bool = False):
+    def __init__(self, space, rule: str = "gauss"):
         self.space = space
-        self.reduced = bool(reduced)
+        self.rule = rule
         patches = getattr(space, "patches", None)
         if patches is None:
-            parts = [_patch_points(space, self.reduced)]
+            parts = [_patch_points(space, rule)]
         else:
-            parts = [_patch_points(sp, self.reduced) for sp in patches]
+            parts = [_patch_points(sp, rule) for sp in patches]
             edges = np.asarray(space._u_edges, dtype=float)
             s_edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in patches])])
             for k, d in enumerate(parts):
@@ -179,14 +171,67 @@ class GalerkinSpace:
         self.patch_ends = tuple((int(a), int(a + m - 1)) for a, m in zip(first, sizes))
         self.m = self.u.size
         self.n = space.n_ctrl
+        self._mass_rule = tuple((d["mass_basis"], d["mass_weights"]) for d in parts)
         self.mass = _frozen(self.weighted_mass(np.ones(self.m)))
+        self.point_mass = _frozen((self.B0 * self.w_full[:, None]).T @ self.B0)
+        _check_definite(self.point_mass, rule)
 
     def weighted_mass(self, density: np.ndarray) -> np.ndarray:
-        """``int rho N_i N_j ds`` with ``rho`` given at the points, ``(n, n)``."""
-        return (self.B0 * (self.w_full * density)[:, None]).T @ self.B0
+        """``int rho N_i N_j ds`` (exact rule) with ``rho`` given at the points, one value
+        per patch, ``(n, n)``."""
+        density = np.asarray(density, dtype=float)
+        blocks = []
+        for k, (a, b) in enumerate(self.patch_ends):
+            rho = density[a]
+            if np.any(density[a:b + 1] != rho):
+                raise ValueError(f"density: expected one value per patch, patch {k} has several")
+            Bm, wm = self._mass_rule[k]
+            blocks.append((Bm * (rho * wm)[:, None]).T @ Bm)
+        return _block_diag(blocks)
 
     def project(self, values: np.ndarray) -> np.ndarray:
-        """L2 projection onto the basis of values at the points, ``(m, k) -> (n, k)``."""
+        """Projection onto the basis of values at the points (the rule's discrete L2
+        product), ``(m, k) -> (n, k)``."""
         import scipy.linalg
 
-        return scipy.linalg.solve(self.mass, self.B0.T @ (self.w_full[:, None] * values), assume_a="pos")
+        return scipy.linalg.solve(self.point_mass, self.B0.T @ (self.w_full[:, None] * values), assume_a="pos")
+
+
+class StrainJacobian(NamedTuple):
+    """Linearized strains at the points about the reference state, per unit control value
+    of the position increment ``eta`` and the rotation increment ``Theta``.
+
+    Attributes
+    ----------
+    gamma, kappa : numpy.ndarray, shape (m, 3, 2, n, 3)
+        ``d Gamma_k[a] / d x[b, i, d]`` and ``d K_k[a] / d x[b, i, d]`` with ``b = 0`` for
+        ``eta`` and ``b = 1`` for ``Theta`` (material strains, ``R = R0 exp(hat(B0 Theta))``).
+    """
+
+    gamma: np.ndarray
+    kappa: np.ndarray
+
+
+def reference_strain_jacobian(gs: "GalerkinSpace") -> StrainJacobian:
+    """:class:`StrainJacobian` of ``gs``: ``dGamma = R0^T B1 eta + Gamma0 x B0 Theta`` and
+    ``dK = B1 Theta + K0 x B0 Theta`` (the Hessian of a quadrature strain energy at rest
+    is ``J^T diag(w C) J``)."""
+    m, n = gs.B0.shape
+    eye = np.eye(3)
+    g = np.zeros((m, 3, 2, n, 3))
+    k = np.zeros((m, 3, 2, n, 3))
+    g[:, :, 0] = np.einsum("kda,ki->kaid", gs.R0, gs.B1)
+    g[:, :, 1] = np.einsum("kda,ki->kaid", np.cross(gs.gamma0[:, None, :], eye[None]), gs.B0)
+    k[:, :, 1] = (np.einsum("da,ki->kaid", eye, gs.B1)
+                  + np.einsum("kda,ki->kaid", np.cross(gs.K0[:, None, :], eye[None]), gs.B0))
+    return StrainJacobian(g, k)
+
+
+def _check_definite(A: np.ndarray, rule: str) -> None:
+    """One-line error if the rule's point mass is not positive definite (too few points
+    to determine a spline of the basis)."""
+    try:
+        BandedSPD(A, np.zeros(A.shape[0], dtype=bool))
+    except np.linalg.LinAlgError:
+        raise ValueError(f"quadrature rule {rule!r}: its points do not determine the basis "
+                         f"(point mass not positive definite); choose a rule with more points") from None

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..iga import CollocationSpace, NurbsCurve, arc_length, arc_nurbs_quadratic, helix_quarter, k_refine, straight
 from ..iga.patches import PatchedSpace, split_curve
+from ..iga.quadrature import RULES
 from ..problems.beam import (
     BeamProblem,
     BeamState,
@@ -92,6 +93,9 @@ KEYS = {
             "balance laws: the paper's primal collocation, the locking-free mixed one (resultant splines), or the "
             "weak form (galerkin: energy-conserving by construction)",
             choices=("primal", "mixed", "galerkin")),
+        Key("space.quadrature", "str", "gauss",
+            "quadrature rule of the galerkin stiffness (gauss: p + 1 Gauss points per knot interval for bending, "
+            "p for axial and shear; greville: one point per control point)", choices=tuple(RULES)),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),
@@ -483,7 +487,8 @@ def _undamped(scene: Scene) -> BeamProblem:
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key
     try:
         pb = beam_problem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
-                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"])
+                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"],
+                          quadrature=scene["space.quadrature"])
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return pb

@@ -101,7 +101,10 @@ class GalerkinBeamProblem(Problem):
         Retardation time [s] of the strain-rate damping, as :class:`~.problem.BeamProblem`.
     integration : {"reduced", "full"}
         Gauss points per knot interval for the axial and shear terms: ``p`` (reduced,
-        the default: locking-free at low degree) or ``p + 1``.
+        the default: locking-free at low degree) or ``p + 1`` (the rule ``"gauss-full"``).
+    quadrature : str
+        Quadrature rule of the stiffness (:data:`liegroup_int.iga.quadrature.RULES`) with
+        ``integration = "reduced"``.
     """
 
     formulation = "galerkin"
@@ -110,7 +113,7 @@ class GalerkinBeamProblem(Problem):
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, integration: str = "reduced"):
+                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss"):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
         kelvin_voigt = float(kelvin_voigt)
@@ -124,7 +127,8 @@ class GalerkinBeamProblem(Problem):
         self.space, self.constants = space, constants
         self.bcs, self.loads, self.initial = bcs, loads, initial
         self.backend = backend
-        self.gs = GalerkinSpace(space, reduced=integration == "reduced")
+        self.quadrature = quadrature
+        self.gs = GalerkinSpace(space, rule="gauss-full" if integration == "full" else quadrature)
         gs = self.gs
         self.n, self.m = gs.n, gs.m
         sections = self._sections(space, constants)
@@ -143,7 +147,7 @@ class GalerkinBeamProblem(Problem):
         self.m_dist = np.asarray(loads.distributed_couple, float)
         self.has_m = bool(np.any(self.m_dist))
         #: ``int mu N_i ds``, ``(n,)``: the linear momentum is ``mass_weights @ v``
-        self.mass_weights = gs.B0.T @ (gs.w_full * self.mu)
+        self.mass_weights = gs.weighted_mass(self.mu).sum(axis=0)
         n, m = self.n, self.m
         self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
                      self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
@@ -161,7 +165,7 @@ class GalerkinBeamProblem(Problem):
         self._M_mu = gs.weighted_mass(self.mu)
         self._M_J = tuple(gs.weighted_mass(self.Jm[:, d]) for d in range(3))
         self.mass_position = BandedSPD(self._M_mu, fixp)
-        self.mass_theta = BandedSPD(gs.mass, fixr)
+        self.mass_theta = BandedSPD(gs.point_mass, fixr)
         self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
         self._constraints = {
             "position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
@@ -257,7 +261,8 @@ class GalerkinBeamProblem(Problem):
     def with_kelvin_voigt(self, tau: float) -> "GalerkinBeamProblem":
         """The same problem with damping ``tau`` [s]."""
         return GalerkinBeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial,
-                                   backend=self.backend, kelvin_voigt=tau, integration=self.integration)
+                                   backend=self.backend, kelvin_voigt=tau, integration=self.integration,
+                                   quadrature=self.quadrature)
 
     @property
     def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

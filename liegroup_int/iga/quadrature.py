@@ -1,0 +1,138 @@
+"""Quadrature rules of the Galerkin beam on one patch: which points carry the stiffness.
+
+A rule gives, on one :class:`~liegroup_int.iga.collocation.CollocationSpace`, sorted
+parameters and two sets of arc-length weights at them: the *bending* weights (bending
+energy, gyroscopic and distributed loads, projections of point values onto the basis)
+and the *axial* weights (axial and shear energy). Every term of the strain energy is a
+weighted sum over the same points, so any rule keeps the semi-discrete Galerkin beam
+Hamiltonian; the rules differ in cost (number of points), accuracy and rank.
+
+Registered rules (:data:`RULES`):
+
+* ``"gauss"``: ``p + 1`` Gauss points per knot interval for bending, ``p`` for the axial
+  and shear terms (reduced integration against shear and membrane locking);
+* ``"gauss-full"``: ``p + 1`` per interval for both;
+* ``"gauss-p"``, ``"gauss-pm1"``, ``"gauss-2"``: ``p``, ``p - 1`` or 2 Gauss points per
+  interval, shared by both sets of terms (``p`` points integrate the bending energy of a
+  straight beam at rest exactly and the axial and shear terms as ``"gauss"``);
+* ``"greville"``: one point per control point, at the Greville abscissae, with the weights
+  that integrate every basis function exactly (Greville quadrature in the sense of Zou et
+  al., CMAME 380, 2021).
+
+The consistent mass matrix does not depend on the rule (:func:`exact_mass_rule`, ``p + 1``
+Gauss points per interval).
+"""
+
+from __future__ import annotations
+
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from .knots import greville
+
+__all__ = ["PatchRule", "RULES", "RULE_DESCRIPTIONS", "exact_mass_rule", "gauss_points", "patch_rule"]
+
+
+class PatchRule(NamedTuple):
+    """Points of one patch and their arc-length weights.
+
+    Attributes
+    ----------
+    u : numpy.ndarray, shape (k,)
+        Parameters in ``[0, 1]``, sorted.
+    w_bending, w_axial : numpy.ndarray, shape (k,)
+        Arc-length weights of the bending and of the axial/shear terms (zero where a
+        point belongs to the other set only).
+    """
+
+    u: np.ndarray
+    w_bending: np.ndarray
+    w_axial: np.ndarray
+
+
+def gauss_points(knots, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points and weights in parameter space, ``n`` per non-empty knot interval.
+
+    Returns
+    -------
+    u, w : numpy.ndarray, shape (n_el * n,)
+    """
+    kv = np.unique(np.asarray(knots, dtype=float))
+    x, gw = np.polynomial.legendre.leggauss(int(n))
+    a, b = kv[:-1, None], kv[1:, None]
+    return (0.5 * (b - a) * x + 0.5 * (a + b)).ravel(), (0.5 * (b - a) * gw).ravel()
+
+
+def _speed(space, u: np.ndarray) -> np.ndarray:
+    """``ds/du`` of the reference centreline at ``u``."""
+    return np.linalg.norm(space.curve.evaluate(u, 1)[1], axis=1)
+
+
+def _gauss_arc(space, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` Gauss points per interval with arc-length weights."""
+    u, w = gauss_points(space.curve.knots, n)
+    return u, w * _speed(space, u)
+
+
+def exact_mass_rule(space) -> tuple[np.ndarray, np.ndarray]:
+    """``p + 1`` Gauss points per interval (exact for ``int N_i N_j ds`` on a straight
+    B-spline beam): parameters and arc-length weights."""
+    return _gauss_arc(space, space.degree + 1)
+
+
+def _gauss_split(n_bending: int, n_axial: int) -> PatchRule:
+    """Two Gauss rules merged (bending points weighted for bending only, and so on)."""
+    def rule(space):
+        ub, wb = _gauss_arc(space, n_bending)
+        if n_axial == n_bending:
+            return PatchRule(ub, wb, wb.copy())
+        ua, wa = _gauss_arc(space, n_axial)
+        u = np.concatenate([ub, ua])
+        order = np.argsort(u, kind="stable")
+        return PatchRule(u[order], np.concatenate([wb, np.zeros_like(wa)])[order],
+                         np.concatenate([np.zeros_like(wb), wa])[order])
+    return rule
+
+
+def _gauss_per_interval(count: Callable[[int], tuple[int, int]]):
+    """A Gauss rule whose point counts per interval depend on the degree."""
+    return lambda space: _gauss_split(*count(space.degree))(space)
+
+
+def _greville_rule(space) -> PatchRule:
+    """Greville abscissae, weights solving ``sum_k w_k N_i(u_k) = int N_i ds`` for every
+    basis function ``N_i`` (a square, nonsingular system: Schoenberg-Whitney)."""
+    u = greville(space.curve.knots, space.degree)
+    um, wm = exact_mass_rule(space)
+    moments = space.point_matrix(um).T @ wm
+    w = np.linalg.solve(space.point_matrix(u).T, moments)
+    return PatchRule(u, w, w.copy())
+
+
+#: Named rules: ``space -> PatchRule``.
+RULES: dict[str, Callable] = {
+    "gauss": _gauss_per_interval(lambda p: (p + 1, p)),
+    "gauss-full": _gauss_per_interval(lambda p: (p + 1, p + 1)),
+    "gauss-p": _gauss_per_interval(lambda p: (p, p)),
+    "gauss-pm1": _gauss_per_interval(lambda p: (p - 1, p - 1)),
+    "gauss-2": _gauss_per_interval(lambda p: (2, 2)),
+    "greville": _greville_rule,
+}
+
+#: One line per rule (scene key help, benchmarks).
+RULE_DESCRIPTIONS = {
+    "gauss": "p + 1 Gauss points per knot interval for bending, p for axial and shear",
+    "gauss-full": "p + 1 Gauss points per knot interval for every term",
+    "gauss-p": "p Gauss points per knot interval for every term",
+    "gauss-pm1": "p - 1 Gauss points per knot interval for every term",
+    "gauss-2": "2 Gauss points per knot interval for every term",
+    "greville": "one point per control point (Greville abscissae), weights exact for the basis",
+}
+
+
+def patch_rule(space, name: str) -> PatchRule:
+    """The rule ``name`` (a key of :data:`RULES`) on one patch."""
+    if name not in RULES:
+        raise ValueError(f"quadrature rule: expected one of {', '.join(RULES)}, got {name!r}")
+    return RULES[name](space)
