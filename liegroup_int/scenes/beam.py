@@ -93,9 +93,10 @@ KEYS = {
             "balance laws: the paper's primal collocation, the locking-free mixed one (resultant splines), or the "
             "weak form (galerkin: energy-conserving by construction)",
             choices=("primal", "mixed", "galerkin")),
-        Key("space.quadrature", "str", "gauss",
-            "quadrature rule of the galerkin stiffness (gauss: p + 1 Gauss points per knot interval for bending, "
-            "p for axial and shear; greville: one point per control point)", choices=tuple(RULES)),
+        Key("space.quadrature", "str", "gauss-p",
+            "quadrature rule of the galerkin stiffness (gauss-p: p Gauss points per knot interval for every term, "
+            "the straight beam's stiffness at rest exactly; gauss: p + 1 for bending, p for axial and shear)",
+            choices=tuple(RULES)),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
         Key("material.nu", "float", 0.3, "Poisson's ratio (G = E / (2 (1 + nu)))"),

@@ -113,7 +113,7 @@ class GalerkinBeamProblem(Problem):
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss"):
+                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss-p"):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
         kelvin_voigt = float(kelvin_voigt)
