@@ -85,10 +85,18 @@ def flat_new_state(data, y):
     return np.empty_like(y)
 
 
+@njit(cache=True, inline="always")
+def copy_flat(src, dst):
+    """``dst[:] = src`` for 1-D arrays of equal length, as a loop: a slice assignment compiles
+    numba's shape check and its error-message formatting into every loop that inlines it."""
+    for j in range(dst.shape[0]):
+        dst[j] = src[j]
+
+
 @njit(cache=True)
 def flat_copy_state(data, src, dst):
     """``dst[:] = src`` for flat states."""
-    dst[:] = src
+    copy_flat(src, dst)
 
 
 @njit(cache=True, inline="always")
@@ -277,7 +285,7 @@ def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, h
     s = b.shape[0]
     evals = 0
     if have_f0:
-        K[0, :] = F[i0]
+        copy_flat(F[i0], K[0])
         qs[0] = q0
     else:
         qs[0] = RATE(data, t, y0, zv, Kv[0])
@@ -421,7 +429,7 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate,
         else:
             rejected += 1
             if fsal and not have_f0:  # K[0] = f(t, y0): the retry starts from it
-                F[i0, :] = K[0]
+                copy_flat(K[0], F[i0])
                 have_f0, q0 = True, qs[0]
             h = _rotation_cap(_h_rejected(err, ang, h_try, max_angle, g), rate, max_angle, g)
             if h < 1e-14 * max(1.0, abs(t)):
