@@ -42,13 +42,13 @@ def figure_dir(args, default: Path) -> Path:
 
 
 def cell(x, spec: str = ".3g") -> str:
-    """A table cell: numbers formatted with ``spec`` (``-`` for None or a non-finite
+    """A table cell: floats formatted with ``spec`` (``-`` for None or a non-finite
     float), anything else as ``str``."""
     if x is None:
         return "-"
     if isinstance(x, float) and not math.isfinite(x):
         return "-"
-    if isinstance(x, (int, float)) and not isinstance(x, bool):
+    if isinstance(x, float):
         return format(x, spec)
     return str(x)
 
