@@ -10,9 +10,9 @@ Five studies, all on the built-in scenes of ``liegroup_int/scenes/builtin``:
    The round-off floor of each measure is the difference between two RKMK6 runs at
    ``|lambda| h = 0.05`` and ``0.1`` (their time errors are far below it); points within 10x
    of a floor are left out of that measure's fit. Step sizes are given as
-   ``y = |lambda|max h`` (method.md 3b: a load switched on at t = 0 excites the top of the
-   spectrum, so orders are only visible for y <~ 0.3; RKMK2 grows those modes by y^4/8 per
-   step and is kept to N y^4 << 1).
+   ``y = |lambda|max h`` (a load switched on at t = 0 excites the top of the spectrum, so
+   orders are only visible for y <~ 0.3; RKMK2 grows those modes by y^4/8 per step and is
+   kept to N y^4 << 1).
 2. **Space convergence** (paper Fig. 4(c)/5(c)). p = 2, 3, 4, 6, 8 (and 5, 7 for the smooth
    loads) against n_ctrl = 11..81
    at ``y = 0.3`` of each discretization (RKMK6 for the loads switched on at t = 0, whose
@@ -48,7 +48,7 @@ Five studies, all on the built-in scenes of ``liegroup_int/scenes/builtin``:
 Usage (from the repository root)::
 
     python benchmarks/beam_convergence.py            # all studies, PNGs in docs/img
-    python benchmarks/beam_convergence.py --quick    # smoke version (~1 min), PNGs in /tmp
+    python benchmarks/beam_convergence.py --quick    # smoke version (seconds), PNGs in a temp dir or --out
     python benchmarks/beam_convergence.py --studies 1 3
     python benchmarks/beam_convergence.py --stability-scan cantilever
         # dense eigenvalues of the linearized semi-discrete operator at rest for
@@ -60,18 +60,17 @@ markdown; ``--markdown FILE`` also writes them to FILE.
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
-import sys
 import time
+
+from liegroup_int.bench.table import figure_dir, parser
 
 
 def _parse():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fast smoke version; figures go to /tmp")
+    ap = parser(__doc__, quick_help="smoke version (tiny meshes and spans); figures in a temporary directory")
     ap.add_argument("--studies", type=int, nargs="*", default=[1, 2, 3, 4, 5])
-    ap.add_argument("--figdir", default=None, help="where to write the PNGs (default docs/img, /tmp with --quick)")
+    ap.add_argument("--figdir", default=None, help="where to write the PNGs (same as --out)")
     ap.add_argument("--markdown", default=None, help="also write the printed tables to this file")
     ap.add_argument("--threads", default="1", help="BLAS threads")
     ap.add_argument("--stability-scan", default=None, metavar="SCENE",
@@ -89,14 +88,18 @@ if ARGS is not None and ARGS.threads:
         os.environ[var] = str(ARGS.threads)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
 
-import numpy as np  # noqa: E402
+import numpy as np  # noqa: E402  (after the BLAS thread count is set)
 import scipy.optimize  # noqa: E402
 
-from liegroup_int.integrators import integrate_fixed, resolve_method, spectral_radius  # noqa: E402
-from liegroup_int.integrators.result import BlowUpError, StepSizeError  # noqa: E402
+from liegroup_int.integrators import (  # noqa: E402
+    BlowUpError,
+    StepSizeError,
+    eigenvalues,
+    integrate_fixed,
+    resolve_method,
+    spectral_radius,
+)
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem  # noqa: E402
 from liegroup_int.studies import fit_rate  # noqa: E402
@@ -165,11 +168,9 @@ TIME_CASES = {
     }),
 }
 TIME_CASES_QUICK = {
-    "pendulum": (0.01, 0.1, {"rkmk2": [0.3, 0.21, 0.15], "rkmk3": [0.3, 0.21, 0.15],
-                             "rkmk4": [0.42, 0.3, 0.21], "rkmk6": [0.85, 0.6, 0.42]}),
-    "cantilever": (2e-4, 0.1, {"rkmk2": [0.075, 0.0525, 0.0375], "rkmk3": [0.3, 0.21, 0.15],
-                               "rkmk4": [0.3, 0.21, 0.15], "rkmk6": [0.6, 0.42, 0.3]}),
+    "pendulum": (0.005, 0.1, {"rkmk2": [0.3, 0.21, 0.15], "rkmk4": [0.42, 0.3, 0.21]}),
 }
+TIME_N_CTRL, TIME_N_CTRL_QUICK = 31, 11
 ORDER = {"rkmk2": 2, "rkmk3": 3, "rkmk4": 4, "rkmk6": 6}
 MEASURES = ("e_c", "e_v", "err_L2")
 
@@ -180,7 +181,8 @@ def time_study(quick: bool) -> dict:
     results = {}
     fit_rows = []
     for scene, (T, y_ref, windows) in cases.items():
-        pb, y0, lam = make(scene, {"space.degree": 4, "space.n_ctrl": 31})
+        n_ctrl = TIME_N_CTRL_QUICK if quick else TIME_N_CTRL
+        pb, y0, lam = make(scene, {"space.degree": 4, "space.n_ctrl": n_ctrl})
         C0 = pb.centreline(y0, ug)
         N, h = steps_for(T, lam, y_ref)
         ref, cpu_ref, _ = run(pb, y0, "rkmk6", T, h)
@@ -193,7 +195,7 @@ def time_study(quick: bool) -> dict:
                     "err_L2": float(np.linalg.norm(pb.centreline(y, ug) - C0 - u_r) / np.linalg.norm(u_r))}
 
         floor = errors(ref2)
-        emit(f"### {scene}: p = 4, n_ctrl = 31, T = {T:g} s, |lambda|max = {lam:.4g} 1/s")
+        emit(f"### {scene}: p = 4, n_ctrl = {n_ctrl}, T = {T:g} s, |lambda|max = {lam:.4g} 1/s")
         emit()
         emit(f"Reference: RKMK6, |lambda| h = {lam * h:.3f} (h = {h:.4g} s, {N} steps, {cpu_ref:.1f} s CPU); "
              f"|u_r| = {np.linalg.norm(u_r):.4g} m over 101 points. Round-off floors (reference vs RKMK6 at "
@@ -313,7 +315,8 @@ SPACE_CASES = [
      {"loads.end.profile": "smooth", "loads.end.ramp": 1e-3}, 1e-3, "rkmk4", [2, 3, 4, 5, 6, 7, 8]),
 ]
 SPACE_NS, SPACE_REF = [11, 21, 31, 41, 61, 81], (8, 121)
-SPACE_PS_QUICK, SPACE_NS_QUICK, SPACE_REF_QUICK = [2, 4], [11, 21, 31], (6, 41)
+SPACE_PS_QUICK, SPACE_NS_QUICK, SPACE_REF_QUICK = [2], [11, 15, 21], (4, 31)
+SPACE_T_QUICK = 0.01  # the first case (pendulum) only
 SPACE_Y = 0.3
 GROWTH_LIMIT = 10.0  # growth probe: max|w| growth over T/5 above this marks "unstable"
 
@@ -343,7 +346,7 @@ def growth_probe(scene: str, overrides: dict, T: float) -> float:
 
 def space_study(quick: bool) -> list:
     ns, ref_pn = (SPACE_NS_QUICK, SPACE_REF_QUICK) if quick else (SPACE_NS, SPACE_REF)
-    cases = SPACE_CASES[::2] if quick else SPACE_CASES
+    cases = [(*SPACE_CASES[0][:3], SPACE_T_QUICK, *SPACE_CASES[0][4:])] if quick else SPACE_CASES
     if ARGS is not None and ARGS.smooth_only:
         cases = [c for c in cases if "smooth" in c[1]]
     ug = np.linspace(0.0, 1.0, 201)
@@ -554,7 +557,7 @@ def identify_modes(t, z, k):
 
 
 def frequency_study(quick: bool) -> dict:
-    T = 0.1 if quick else 0.5
+    T = 0.05 if quick else 0.5
     n_list = [11] if quick else [11, 21, 31]
     y_step = 2.0
     dt_out = 2.5e-4
@@ -610,9 +613,7 @@ def frequency_study(quick: bool) -> dict:
     table(["n_ctrl", "\\|lambda\\|max", "\\|lambda\\| h", "steps", "CPU s", "f1 [Hz]", "vs EB", "vs Timo.",
            "f1 Hann-FFT", "f2 [Hz]", "vs EB", "vs Timo.", "f3 [Hz]", "vs EB", "vs Timo.", "fit rms / amp1"], rows)
     # 3b: frequencies of the linearized semi-discrete operator
-    from liegroup_int.integrators.spectrum import eigenvalues
-
-    ps3, ns3 = ([4], [11, 21]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61])
+    ps3, ns3 = ([4], [11]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61])
     rows = []
     for p in ps3:
         for n in ns3:
@@ -642,8 +643,7 @@ SCENE_RUNS = {
     "arch": (1.0, 1e-3, 0.25),
     "spinning_helix": (1.0, 0.005, 0.0),
 }
-SCENE_RUNS_QUICK = {"pendulum": (0.1, 0.005, 0.0), "cantilever": (0.005, 2.5e-4, 0.0),
-                    "arch": (0.02, 1e-4, 0.01), "spinning_helix": (0.1, 0.005, 0.0)}
+SCENE_RUNS_QUICK = {"pendulum": (0.01, 0.002, 0.0), "cantilever": (5e-4, 1e-4, 0.0)}
 
 
 class Recorder:
@@ -708,7 +708,7 @@ def scene_study(quick: bool) -> dict:
             add(scene, f"n_ctrl = {n2}, dt/2", T, method, dt / 2, t_ref, r)
         # time integrator vs space: the same short span with the scene's RKMK4 step and with
         # RKMK6 at |lambda| dt = 0.3 (the arch: a 2 ms couple pulse, drift over 2-10 ms)
-        Tc = CHECK_SPANS[scene] if not quick else CHECK_SPANS[scene] / 4
+        Tc = CHECK_SPANS[scene] if not quick else T / 2
         ev_c = min(every, Tc / 20)
         ov_c = {"loads.end.t_off": 0.002} if scene == "arch" else {}
         tr_c = 0.002 if scene == "arch" else t_ref
@@ -855,8 +855,6 @@ def plot_frequency(fr: dict, path: str) -> None:
 
 # ---------------------------------------------------------------------------------------
 def stability_scan(scene: str) -> None:
-    from liegroup_int.integrators.spectrum import eigenvalues
-
     ns = [11, 16, 21, 31, 41, 51, 61, 71, 81, 91, 101, 121]
     emit(f"max Re(lambda) [1/s] of the linearized increment map at rest, {scene} (dense, central differences)")
     emit()
@@ -876,8 +874,9 @@ def main(args) -> None:
     import matplotlib
     import numba
 
-    figdir = args.figdir or ("/tmp" if args.quick else os.path.join(ROOT, "docs", "img"))
-    os.makedirs(figdir, exist_ok=True)
+    if args.figdir:
+        args.out = args.figdir
+    figdir = str(figure_dir(args, os.path.join(ROOT, "docs", "img")))
     t_start = CLOCK()
     w_start = time.perf_counter()
     emit(f"<!-- beam_convergence.py {'--quick ' if args.quick else ''}studies {args.studies}: python "
