@@ -21,7 +21,7 @@ these step sizes).
 treats the section as incompressible, so with the stretch e = |x'| (``dilatation``) its
 internal force is ``Q^T S sigma / e``, its couple ``B kappa / e^3`` (Voronoi e) and its
 element rotational inertia ``J / e`` (with the matching ``J omega / e^2 de/dt`` term). Ours
-(method.md) is the Simo-Reissner rod with constant ``C_N, C_M, J``. ``LinearCosseratRod``
+is the Simo-Reissner rod with constant ``C_N, C_M, J``. ``LinearCosseratRod``
 swaps in forces, torques and accelerations without these factors (the same discrete
 operators, kinematics and strains otherwise), i.e. PyElastica's discretization of *our*
 continuum model.
