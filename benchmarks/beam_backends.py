@@ -71,68 +71,23 @@ if ARGS is not None and ARGS.threads:
 
 import numpy as np  # noqa: E402  (after the BLAS thread count is set)
 
+from liegroup_int.bench.beam_step import TAB, NullProblem, cantilever, no_monitor, start_state, step_dt  # noqa: E402
+from liegroup_int.bench.beam_step import time_steps as _time_steps  # noqa: E402
 from liegroup_int.bench.timing import best_of  # noqa: E402
-from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
-from liegroup_int.scenes import load_scene  # noqa: E402
-from liegroup_int.scenes.beam import problem as scene_problem  # noqa: E402
+from liegroup_int.integrators import integrate_fixed  # noqa: E402
 
-TAB = resolve_method("rkmk4")
 CLOCK = time.process_time
 STAGES = TAB.stages
 
 
-class NullProblem:
-    """The driver's own cost: increments of the beam's shape, no work."""
-
-    def __init__(self, n):
-        self.n = n
-
-    def action(self, u, y):
-        return y
-
-    def end_step(self, y):
-        return y
-
-    def increment_rate(self, t, y, u):
-        return np.zeros((4, self.n, 3))
-
-    def zero_increment(self, y):
-        return np.zeros((4, self.n, 3))
-
-    def rotation_angle(self, u):
-        return 0.0
-
-
 def problems(n):
     """The cantilever at ``n_ctrl = n`` with the NumPy and the numba backend."""
-    return tuple(scene_problem(load_scene("cantilever", {"space.n_ctrl": n, "space.degree": 4,
-                                                         "integrator.backend": backend}))
-                 for backend in ("numpy", "numba"))
-
-
-def start_state(pb):
-    """Smooth deformed, moving state (see the module docstring)."""
-    s = np.asarray(pb.space.curve.greville())
-    u = np.zeros((4, pb.n, 3))
-    u[0, :, 1], u[0, :, 2] = 5e-4 * s**3, 1e-3 * s**2
-    u[1, :, 1], u[1, :, 2] = 1e-2 * s**2, 5e-3 * s**3
-    u[2, :, 2] = 1e-2 * s**2
-    u[3, :, 1] = 1e-2 * s**2
-    return pb.action(u, pb.initial_state())
-
-
-def no_monitor(t, y, stats):
-    """A per-step monitor that does nothing: keeps the driver on its generic loop."""
+    return cantilever(n, "numpy"), cantilever(n, "numba")
 
 
 def time_steps(prob, y, dt, batch_s, repeats, monitor=None):
-    """Best per-step seconds over ``repeats`` batches of ``N`` steps, ``N`` and the end state."""
-    integrate_fixed(prob, TAB, (0.0, 2 * dt), y, dt, monitor=monitor)  # warm-up (JIT, caches)
-    est = best_of(lambda: integrate_fixed(prob, TAB, (0.0, 10 * dt), y, dt, monitor=monitor), 1,
-                  clock=CLOCK).seconds / 10
-    N = max(3, int(np.ceil(batch_s / max(est, 1e-7))))
-    t = best_of(lambda: integrate_fixed(prob, TAB, (0.0, N * dt), y, dt, monitor=monitor), repeats, clock=CLOCK)
-    return t.seconds / N, N, t.result[1]
+    """:func:`liegroup_int.bench.beam_step.time_steps` on this script's clock."""
+    return _time_steps(prob, y, dt, batch_s, repeats, monitor, CLOCK)
 
 
 def rel_diff(a, b, y0):
@@ -163,7 +118,7 @@ def measure(n, args):
     if pb.compiled_kernels() is not None or nb.compiled_kernels() is None:
         raise RuntimeError("beam_backends: expected compiled kernels with backend numba only")
     y = start_state(pb)
-    dt = 0.3e-6 * (31.0 / n) ** 2
+    dt = step_dt(n)
     t_np, N_np, y_np = time_steps(pb, y, dt, args.batch, args.repeats)
     t_nb, N_nb, y_nb = time_steps(nb, y, dt, args.batch, args.repeats, monitor=no_monitor)
     t_fu, N_fu, y_fu = time_steps(nb, y, dt, args.batch, args.repeats)
