@@ -901,18 +901,10 @@ def quick(args):
         print(f"wrote {png}")
 
 
-def main(argv=None):
-    ap = parser(__doc__, quick_help="small sweep for a smoke test; no docs (the figure goes to --out)")
-    ap.add_argument("--no-write", action="store_true", help="do not write docs/benchmarks.md or the PNG")
-    args = ap.parse_args(argv)
-    if args.quick:
-        return quick(args)
-    cfg = FULL
+def free_body_part(cfg) -> dict:
+    """Every free-body run (targets 1, 2, 4): the compile probes, the reference, the sweep,
+    the FSAL runs and the generic loop's overhead."""
     fcfg = cfg["fb"]
-    write = not args.no_write
-    wall0, cpu0 = time.perf_counter(), time.process_time()
-
-    # ---- free body (targets 1, 2, 4) ----
     print(f"free body (README): I={FB.INERTIA}, W0={FB.W0}, T={FB.T_END}")
     comp = first_call_times(fcfg["first_calls"])
     for m, v in comp.items():
@@ -936,9 +928,13 @@ def main(argv=None):
     print(f"njit vs Python f, rkmk45 tol {FB_TOL:.0e}: final states differ by {agree:.1e}, same steps: {same_steps}")
     over = generic_overhead(cfg, extra["python"][0])
 
-    rows, ref_diff = heavy_top_sweep(cfg, skipped)
+    return dict(comp=comp, fb_ref=fb_ref, fb_half=fb_half, fb_dop=fb_dop, fb_rows=fb_rows, skipped=skipped,
+                extra=extra, agree=agree, same_steps=same_steps, over=over)
 
-    # ---- analysis ----
+
+def analyse(cfg, fb: dict, rows, ref_diff) -> dict:
+    """The targets' tables, the per-evaluation costs and the tableaux' defects."""
+    fb_rows, extra, over = fb["fb_rows"], fb["extra"], fb["over"]
     h1, r1, t1 = target1(fb_rows)
     h2, r2, t2 = target2(fb_rows, over)
     h3, r3, t3 = target3(rows)
@@ -946,42 +942,50 @@ def main(argv=None):
     h4, r4, t4 = target4(rows, fb_rows, extra)
     pe, fpe = per_eval_costs(rows), fb_per_eval_costs(fb_rows)
     defects = float_coefficient_defects(list(cfg["fixed"]) + list(cfg["adaptive"]))
-    ref_info = {"top": ref_diff, "fb_half": fb_half, "fb_dop": fb_dop}
-    heads = headline(t1, t2, t3, t4, comp)
+    ref_info = {"top": ref_diff, "fb_half": fb["fb_half"], "fb_dop": fb["fb_dop"]}
+    heads = headline(t1, t2, t3, t4, fb["comp"])
     hh = ["target", "goal", "measured", "verdict"]
     fb_table = [fb_fmt_row(r) for r in fb_rows]
     table_rows = [fmt_row(r) for r in rows]
 
-    print("\nfree body runs:\n" + md_table(FB_HEADER, fb_table))
-    print("\nheavy-top runs:\n" + md_table(HEADER, table_rows))
-    print("\nTarget 1 (free body, numba.njit f vs DOP853 plain-float RHS):\n" + md_table(h1, r1))
-    print("\nTarget 2 (free body, Python f vs DOP853 NumPy-style RHS):\n" + md_table(h2, r2))
+    text = reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects)
+    return dict(h1=h1, r1=r1, h2=h2, r2=r2, h3=h3, r3=r3, sh=sh, srows=srows, h4=h4, r4=r4, pe=pe, fpe=fpe,
+                defects=defects, heads=heads, hh=hh, fb_table=fb_table, table_rows=table_rows, text=text)
+
+
+def print_report(fb: dict, a: dict) -> None:
+    over, pe, fpe = fb["over"], a["pe"], a["fpe"]
+    print("\nfree body runs:\n" + md_table(FB_HEADER, a["fb_table"]))
+    print("\nheavy-top runs:\n" + md_table(HEADER, a["table_rows"]))
+    print("\nTarget 1 (free body, numba.njit f vs DOP853 plain-float RHS):\n" + md_table(a["h1"], a["r1"]))
+    print("\nTarget 2 (free body, Python f vs DOP853 NumPy-style RHS):\n" + md_table(a["h2"], a["r2"]))
     print(f"generic loop per stage without f: adaptive rkmk45 {over['adaptive rkmk45'][0]:.1f} us "
           f"({over['adaptive rkmk45'][1]} evals), fixed rkmk4 {over['fixed rkmk4'][0]:.1f} us; "
           f"README f alone {over['f_python']:.1f} us; by subtraction {over.get('subtracted rkmk45', float('nan')):.1f} us")
-    print("\nTarget 3 (heavy top, adaptive, compiled engine vs scipy best):\n" + md_table(h3, r3))
-    print("\nHeavy top, all methods:\n" + md_table(sh, srows))
-    print("\nTarget 4 (FSAL):\n" + md_table(h4, r4))
+    print("\nTarget 3 (heavy top, adaptive, compiled engine vs scipy best):\n" + md_table(a["h3"], a["r3"]))
+    print("\nHeavy top, all methods:\n" + md_table(a["sh"], a["srows"]))
+    print("\nTarget 4 (FSAL):\n" + md_table(a["h4"], a["r4"]))
     print(f"\nCPU per RHS evaluation (median, runs >= 500 evals): heavy top fixed {pe['fixed']:.2g} us, "
           f"adaptive {pe['adaptive']:.2g} us, scipy {pe['scipy']:.2g} / NumPy RHS {pe['scipy-numpy']:.2g} us; "
           f"free body njit {fpe['njit']:.2g} us, Python f {fpe['python']:.2g} us, scipy {fpe['scipy-float']:.2g} / "
           f"NumPy RHS {fpe['scipy-numpy']:.2g} us")
     print("\norder-condition defects of the float64-rounded tableaux (order 1, order 2; max|A|, max|b|):")
-    for m, (d1, d2, amax, bmax) in defects.items():
+    for m, (d1, d2, amax, bmax) in a["defects"].items():
         print(f"  {m:7s} {d1: .1e} {d2: .1e}   {amax:7.1f} {bmax:7.1f}")
-    print("\n" + md_table(hh, heads))
-    text = reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects)
-    print("\n" + text)
-    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
-    print(f"\ntotal runtime: {wall:.1f} s wall, {cpu:.1f} s CPU (this process; compile probes run in subprocesses)")
+    print("\n" + md_table(a["hh"], a["heads"]))
+    print("\n" + a["text"])
 
-    if write:
-        png = figure_dir(args, ROOT / "docs" / "img") / PNG_NAME
-        plot(rows, fb_rows, str(png))
-        print(f"wrote {png}")
-        date = _dt.date.today().isoformat()
-        sk = "" if not skipped else "\nSkipped runs: " + "; ".join(f"`{x}`" for x in skipped) + "\n"
-        block = f"""## Rigid bodies: work-precision, liegroup_int vs scipy `solve_ivp`
+
+def _doc_names(cfg, fb: dict, a: dict, ref_diff: float, wall: float) -> dict:
+    """The names the documentation templates use."""
+    h_ref = T_END / cfg["ref_steps"]
+    return dict(cfg=cfg, fcfg=cfg["fb"], wall=wall, h_ref=h_ref, ref_diff=ref_diff, date=_dt.date.today().isoformat(),
+                sk="" if not fb["skipped"] else "\nSkipped runs: " + "; ".join(f"`{x}`" for x in fb["skipped"]) + "\n",
+                **{k: fb[k] for k in ("comp", "fb_half", "fb_dop", "over", "agree", "same_steps")}, **a)
+
+
+def doc_head(cfg, wall, hh, heads, date, **_) -> str:
+    return f"""## Rigid bodies: work-precision, liegroup_int vs scipy `solve_ivp`
 
 Generated on {date} by
 
@@ -998,7 +1002,11 @@ apart). Error = `|R(T) - R_ref(T)|_F + |W(T) - W_ref(T)|` at the final time. Pee
 
 {md_table(hh, heads)}
 
-### Free body near the intermediate axis (the README's example; targets 1, 2)
+"""
+
+
+def doc_free_body(fcfg, comp, fb_half, fb_dop, over, agree, same_steps, h1, r1, h2, r2, fb_table, **_) -> str:
+    return f"""### Free body near the intermediate axis (the README's example; targets 1, 2)
 
 `I = {FB.INERTIA}`, `R0 = I`, `W0 = {FB.W0}`, `t in [0, {FB.T_END:g}]` s (the body flips about every 3 s);
 `liegroup_int/bench/free_body.py` holds the four forms of the right-hand side. Ours: `integrate(f, y0, (0, 20),
@@ -1036,7 +1044,11 @@ Generic-loop overhead per stage, excluding f (an f returning a precomputed array
 
 </details>
 
-### Heavy top (built-in `RigidBody(...).problem()`, compiled; target 3)
+"""
+
+
+def doc_heavy_top(h_ref, ref_diff, h3, r3, sh, srows, table_rows, sk, h4, r4, pe, fpe, text, **_) -> str:
+    return f"""### Heavy top (built-in `RigidBody(...).problem()`, compiled; target 3)
 
 Non-symmetric heavy top on SO(3) x R^3, body frame: `dR/dt = R hat(W)`,
 `I dW/dt = (I W) x W + m g (Gamma x chi)`, `Gamma = R^T e3`, with `I = {INERTIA}` kg m^2,
@@ -1082,8 +1094,30 @@ CPU per RHS evaluation (median over runs with >= 500 evaluations): heavy top, co
 
 {text}
 """
-        write_doc(block, str(DOC))
-        print(f"wrote the '{SECTION}' section of {DOC.relative_to(ROOT)}")
+
+
+def main(argv=None):
+    ap = parser(__doc__, quick_help="small sweep for a smoke test; no docs (the figure goes to --out)")
+    ap.add_argument("--no-write", action="store_true", help="do not write docs/benchmarks.md or the PNG")
+    args = ap.parse_args(argv)
+    if args.quick:
+        return quick(args)
+    cfg = FULL
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    fb = free_body_part(cfg)
+    rows, ref_diff = heavy_top_sweep(cfg, fb["skipped"])
+    a = analyse(cfg, fb, rows, ref_diff)
+    print_report(fb, a)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    print(f"\ntotal runtime: {wall:.1f} s wall, {cpu:.1f} s CPU (this process; compile probes run in subprocesses)")
+    if args.no_write:
+        return
+    png = figure_dir(args, ROOT / "docs" / "img") / PNG_NAME
+    plot(rows, fb["fb_rows"], str(png))
+    print(f"wrote {png}")
+    names = _doc_names(cfg, fb, a, ref_diff, wall)
+    write_doc(doc_head(**names) + doc_free_body(**names) + doc_heavy_top(**names), str(DOC))
+    print(f"wrote the '{SECTION}' section of {DOC.relative_to(ROOT)}")
 
 
 if __name__ == "__main__":
