@@ -175,6 +175,23 @@ ORDER = {"rkmk2": 2, "rkmk3": 3, "rkmk4": 4, "rkmk6": 6}
 MEASURES = ("e_c", "e_v", "err_L2")
 
 
+def fit_cells(pts: list, floor: dict) -> tuple[list, dict]:
+    """Fitted slopes of each measure over the points above 10x its floor: table cells and
+    ``{measure: slope}`` (nan below 3 points)."""
+    cells, fitted = [], {}
+    for k in MEASURES:
+        ok = [p for p in pts if np.isfinite(p[k]) and p[k] > 10 * floor[k]]
+        if len(ok) >= 3:
+            s = slope([p["h"] for p in ok], [p[k] for p in ok])
+            y_lo, y_hi = min(p["y"] for p in ok), max(p["y"] for p in ok)
+            cells.append(f"**{s:.2f}** ({len(ok)} pts, y {y_lo:.3g}-{y_hi:.3g})")
+        else:
+            s = np.nan
+            cells.append(f"below floor ({len(ok)} pts)")
+        fitted[k] = s
+    return cells, fitted
+
+
 def time_study(quick: bool) -> dict:
     cases = TIME_CASES_QUICK if quick else TIME_CASES
     ug = np.linspace(0.0, 1.0, 101)
@@ -221,16 +238,8 @@ def time_study(quick: bool) -> dict:
         table(["method", "\\|lambda\\| h", "h [s]", "steps", "CPU s", "e_c [m] (local slope)",
                "e_v [m/s] (local slope)", "err_L2 (local slope)"], rows)
         for m, pts in per.items():
-            cells = []
-            for k in MEASURES:
-                ok = [p for p in pts if np.isfinite(p[k]) and p[k] > 10 * floor[k]]
-                if len(ok) >= 3:
-                    s = slope([p["h"] for p in ok], [p[k] for p in ok])
-                    y_lo, y_hi = min(p["y"] for p in ok), max(p["y"] for p in ok)
-                    cells.append(f"**{s:.2f}** ({len(ok)} pts, y {y_lo:.3g}-{y_hi:.3g})")
-                else:
-                    cells.append(f"below floor ({len(ok)} pts)")
-                results.setdefault(scene, {}).setdefault(m, {})[k] = (s if len(ok) >= 3 else np.nan)
+            cells, fitted = fit_cells(pts, floor)
+            results.setdefault(scene, {})[m] = fitted
             fit_rows.append([scene, m, str(ORDER[m]), f"{pts[-1]['y']:.3g}-{pts[0]['y']:.3g}", *cells])
         results[scene]["_runs"] = per
         results[scene]["_floor"] = floor
@@ -344,6 +353,47 @@ def growth_probe(scene: str, overrides: dict, T: float) -> float:
         return np.inf
 
 
+def space_tables(res: dict, ps, ns) -> dict:
+    """Emits the error table and the fitted rates of one space study; returns ``{p: rate}``."""
+    rows = []
+    for p in ps:
+        cells = []
+        for n in ns:
+            r = res.get((p, n))
+            if r is None:
+                cells.append("")
+                continue
+            cells.append(fmt(r["e"], 2) + (" (unstable)" if r["growth"] > GROWTH_LIMIT else ""))
+        rows.append([str(p), *cells])
+    emit("err_L2 by degree p (rows) and n_ctrl (columns):")
+    emit()
+    table(["p \\ n_ctrl", *map(str, ns)], rows)
+    rate_rows = []
+    rates = {}
+    for p in ps:
+        pts = [(n, res[(p, n)]) for n in ns if (p, n) in res]
+        good = [(n, r) for n, r in pts if r["growth"] <= GROWTH_LIMIT][-4:]
+        bad = [n for n, r in pts if r["growth"] > GROWTH_LIMIT]
+        if len(good) >= 3:
+            hs = [r["h"] for _, r in good]
+            s2 = slope(hs, [r["e"] for _, r in good])
+            sm = slope(hs, [r["emax"] for _, r in good])
+            loc = [np.log(a["e"] / b["e"]) / np.log(a["h"] / b["h"]) for (_, a), (_, b) in zip(good[:-1], good[1:])]
+        else:
+            s2 = sm = np.nan
+            loc = []
+        rates[p] = s2
+        expected = p if p % 2 == 0 else p - 1
+        rate_rows.append([str(p), str(expected), ", ".join(str(n) for n, _ in good), f"**{s2:.2f}**",
+                          f"{sm:.2f}", ", ".join(f"{x:.2f}" for x in loc),
+                          ", ".join(f"{n} (x{res[(p, n)]['growth']:.2g})" for n in bad) or "-"])
+    emit("Fitted rates against h = 1/(n_ctrl - p) (finest four stable meshes):")
+    emit()
+    table(["p", "Greville rate (p even: p, odd: p-1)", "n_ctrl used", "rate err_L2", "rate max-norm",
+           "local rates err_L2", "unstable (growth over T/5)"], rate_rows)
+    return rates
+
+
 def space_study(quick: bool) -> list:
     ns, ref_pn = (SPACE_NS_QUICK, SPACE_REF_QUICK) if quick else (SPACE_NS, SPACE_REF)
     cases = [(*SPACE_CASES[0][:3], SPACE_T_QUICK, *SPACE_CASES[0][4:])] if quick else SPACE_CASES
@@ -383,42 +433,7 @@ def space_study(quick: bool) -> list:
                 g = growth_probe(scene, {**ov, "space.degree": p, "space.n_ctrl": n}, T / 5)
                 res[(p, n)] = dict(e=float(np.linalg.norm(u - u_r) / nr), emax=float(np.abs(u - u_r).max()),
                                    cpu=cpu, lam=lam, N=N, growth=g, h=1.0 / (n - p))
-        rows = []
-        for p in ps:
-            cells = []
-            for n in ns:
-                r = res.get((p, n))
-                if r is None:
-                    cells.append("")
-                    continue
-                cells.append(fmt(r["e"], 2) + (" (unstable)" if r["growth"] > GROWTH_LIMIT else ""))
-            rows.append([str(p), *cells])
-        emit("err_L2 by degree p (rows) and n_ctrl (columns):")
-        emit()
-        table(["p \\ n_ctrl", *map(str, ns)], rows)
-        rate_rows = []
-        rates = {}
-        for p in ps:
-            pts = [(n, res[(p, n)]) for n in ns if (p, n) in res]
-            good = [(n, r) for n, r in pts if r["growth"] <= GROWTH_LIMIT][-4:]
-            bad = [n for n, r in pts if r["growth"] > GROWTH_LIMIT]
-            if len(good) >= 3:
-                hs = [r["h"] for _, r in good]
-                s2 = slope(hs, [r["e"] for _, r in good])
-                sm = slope(hs, [r["emax"] for _, r in good])
-                loc = [np.log(a["e"] / b["e"]) / np.log(a["h"] / b["h"]) for (_, a), (_, b) in zip(good[:-1], good[1:])]
-            else:
-                s2 = sm = np.nan
-                loc = []
-            rates[p] = s2
-            expected = p if p % 2 == 0 else p - 1
-            rate_rows.append([str(p), str(expected), ", ".join(str(n) for n, _ in good), f"**{s2:.2f}**",
-                              f"{sm:.2f}", ", ".join(f"{x:.2f}" for x in loc),
-                              ", ".join(f"{n} (x{res[(p, n)]['growth']:.2g})" for n in bad) or "-"])
-        emit("Fitted rates against h = 1/(n_ctrl - p) (finest four stable meshes):")
-        emit()
-        table(["p", "Greville rate (p even: p, odd: p-1)", "n_ctrl used", "rate err_L2", "rate max-norm",
-               "local rates err_L2", "unstable (growth over T/5)"], rate_rows)
+        rates = space_tables(res, ps, ns)
         cpu_all = sum(r["cpu"] for r in res.values())
         emit(f"(CPU of the {len(res)} runs: {cpu_all:.1f} s; largest growth factor among the stable ones: "
              f"{max(r['growth'] for r in res.values() if r['growth'] <= GROWTH_LIMIT):.2g})")
@@ -556,6 +571,28 @@ def identify_modes(t, z, k):
     return f[order], amps[order], float(np.sqrt(np.mean(res**2)))
 
 
+def operator_frequencies(grid, f_ti) -> None:
+    """Study 3b: the first three frequencies of the linearized semi-discrete operator at
+    rest over ``grid = (degrees, n_ctrl values)``, against Timoshenko's ``f_ti``."""
+    ps3, ns3 = grid
+    rows = []
+    for p in ps3:
+        for n in ns3:
+            pb, y0, lam = make("cantilever", {"space.degree": p, "space.n_ctrl": n, "loads.end.force": [0.0, 0.0, 0.0]})
+            ev = eigenvalues(pb, 0.0, y0)
+            f = np.sort(np.abs(ev.imag[ev.imag > 1e-6])) / (2 * np.pi)
+            uniq = []  # bending modes come in pairs (two planes of a square section)
+            for x in f:
+                if not uniq or x - uniq[-1] > 1e-7 * x:
+                    uniq.append(x)
+            f = np.array(uniq[:3])
+            rows.append([str(p), str(n), *[f"{f[k]:.6f} ({(f[k] - f_ti[k]) / f_ti[k]:+.2e})" for k in range(3)],
+                         f"{ev.real.max():.1e}"])
+    emit("3b. Frequencies of the linearized semi-discrete operator at rest, Hz (relative error vs Timoshenko):")
+    emit()
+    table(["p", "n_ctrl", "f1", "f2", "f3", "max Re(lambda) 1/s"], rows)
+
+
 def frequency_study(quick: bool) -> dict:
     T = 0.05 if quick else 0.5
     n_list = [11] if quick else [11, 21, 31]
@@ -612,24 +649,7 @@ def frequency_study(quick: bool) -> dict:
     emit()
     table(["n_ctrl", "\\|lambda\\|max", "\\|lambda\\| h", "steps", "CPU s", "f1 [Hz]", "vs EB", "vs Timo.",
            "f1 Hann-FFT", "f2 [Hz]", "vs EB", "vs Timo.", "f3 [Hz]", "vs EB", "vs Timo.", "fit rms / amp1"], rows)
-    # 3b: frequencies of the linearized semi-discrete operator
-    ps3, ns3 = ([4], [11]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61])
-    rows = []
-    for p in ps3:
-        for n in ns3:
-            pb, y0, lam = make("cantilever", {"space.degree": p, "space.n_ctrl": n, "loads.end.force": [0.0, 0.0, 0.0]})
-            ev = eigenvalues(pb, 0.0, y0)
-            f = np.sort(np.abs(ev.imag[ev.imag > 1e-6])) / (2 * np.pi)
-            uniq = []  # bending modes come in pairs (two planes of a square section)
-            for x in f:
-                if not uniq or x - uniq[-1] > 1e-7 * x:
-                    uniq.append(x)
-            f = np.array(uniq[:3])
-            rows.append([str(p), str(n), *[f"{f[k]:.6f} ({(f[k] - f_ti[k]) / f_ti[k]:+.2e})" for k in range(3)],
-                         f"{ev.real.max():.1e}"])
-    emit("3b. Frequencies of the linearized semi-discrete operator at rest, Hz (relative error vs Timoshenko):")
-    emit()
-    table(["p", "n_ctrl", "f1", "f2", "f3", "max Re(lambda) 1/s"], rows)
+    operator_frequencies(([4], [11]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61]), f_ti)
     return dict(hist=hist, f_eb=f_eb, f_ti=f_ti)
 
 
@@ -684,6 +704,31 @@ def _scene_run(scene, overrides, T, every, dt, method, t_ref):
 CHECK_SPANS = {"pendulum": 0.2, "cantilever": 0.005, "arch": 0.01, "spinning_helix": 0.1}
 
 
+def scene_summaries(out: dict, quick: bool) -> None:
+    """Emits the arch's and the helix's figures from their runs (when run)."""
+    if "arch" in out:
+        a = out["arch"]
+        t_off = 0.01 if quick else 0.25
+        on = a["t"] < t_off
+        x1 = a["tip"][:, 0]
+        emit(f"Arch tip x1 while the couple acts (t < {t_off:g} s): min {x1[on].min():.4f} m, max {x1[on].max():.4f} m "
+             f"(3/(2 pi) = {3 / (2 * np.pi):.4f}); after removal: min {x1[~on].min():.4f}, max {x1[~on].max():.4f} m; "
+             f"tip x2 range [{a['tip'][:, 1].min():.4f}, {a['tip'][:, 1].max():.4f}] m. Tip curvature k3 = (R K)_3: "
+             f"initial {a['ktip'][0, 2]:.4f} 1/m (-pi/3 = {-np.pi / 3:.4f}), range "
+             f"[{a['ktip'][1:, 2][on[1:]].min():.4f}, {a['ktip'][1:, 2][on[1:]].max():.4f}] while on (t > 0), "
+             f"[{a['ktip'][~on, 2].min():.4f}, {a['ktip'][~on, 2].max():.4f}] after; at the middle collocation "
+             f"point [{a['kmid'][on, 2].min():.4f}, {a['kmid'][on, 2].max():.4f}] while on, "
+             f"[{a['kmid'][~on, 2].min():.4f}, {a['kmid'][~on, 2].max():.4f}] after.")
+        emit()
+    if "spinning_helix" in out:
+        a = out["spinning_helix"]
+        u = a["tip"] - a["tip"][0]
+        emit(f"Spinning helix tip displacement range over the span: u1 [{u[:, 0].min():.4f}, {u[:, 0].max():.4f}], "
+             f"u2 [{u[:, 1].min():.4f}, {u[:, 1].max():.4f}], u3 [{u[:, 2].min():.4f}, {u[:, 2].max():.4f}] m; "
+             f"h3(0) = {a['h'][0, 2]:.6g} kg m^2/s.")
+        emit()
+
+
 def scene_study(quick: bool) -> dict:
     runs = SCENE_RUNS_QUICK if quick else SCENE_RUNS
     out = {}
@@ -729,27 +774,7 @@ def scene_study(quick: bool) -> dict:
     emit()
     table(["scene", "variant", "span s", "method", "dt s", "\\|lambda\\| dt", "steps", "CPU s", "t_ref s",
            "KE scale J", "energy drift / KE scale", "max orth. err.", "axial ang. mom. drift (rel.)"], rows)
-    if "arch" in out:
-        a = out["arch"]
-        t_off = 0.01 if quick else 0.25
-        on = a["t"] < t_off
-        x1 = a["tip"][:, 0]
-        emit(f"Arch tip x1 while the couple acts (t < {t_off:g} s): min {x1[on].min():.4f} m, max {x1[on].max():.4f} m "
-             f"(3/(2 pi) = {3 / (2 * np.pi):.4f}); after removal: min {x1[~on].min():.4f}, max {x1[~on].max():.4f} m; "
-             f"tip x2 range [{a['tip'][:, 1].min():.4f}, {a['tip'][:, 1].max():.4f}] m. Tip curvature k3 = (R K)_3: "
-             f"initial {a['ktip'][0, 2]:.4f} 1/m (-pi/3 = {-np.pi / 3:.4f}), range "
-             f"[{a['ktip'][1:, 2][on[1:]].min():.4f}, {a['ktip'][1:, 2][on[1:]].max():.4f}] while on (t > 0), "
-             f"[{a['ktip'][~on, 2].min():.4f}, {a['ktip'][~on, 2].max():.4f}] after; at the middle collocation "
-             f"point [{a['kmid'][on, 2].min():.4f}, {a['kmid'][on, 2].max():.4f}] while on, "
-             f"[{a['kmid'][~on, 2].min():.4f}, {a['kmid'][~on, 2].max():.4f}] after.")
-        emit()
-    if "spinning_helix" in out:
-        a = out["spinning_helix"]
-        u = a["tip"] - a["tip"][0]
-        emit(f"Spinning helix tip displacement range over the span: u1 [{u[:, 0].min():.4f}, {u[:, 0].max():.4f}], "
-             f"u2 [{u[:, 1].min():.4f}, {u[:, 1].max():.4f}], u3 [{u[:, 2].min():.4f}, {u[:, 2].max():.4f}] m; "
-             f"h3(0) = {a['h'][0, 2]:.6g} kg m^2/s.")
-        emit()
+    scene_summaries(out, quick)
     return out
 
 
