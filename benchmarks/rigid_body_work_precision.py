@@ -731,7 +731,7 @@ def plateau(rs):
     return (min(r["err"] for r in rs), gain) if gain < 4 else None
 
 
-def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
+def _reading_free_body(fb_rows, t1, t2, over, fpe) -> list[str]:
     parts = []
     ok1 = [x for x in t1 if x["ratio"] is not None]
     if ok1:
@@ -763,6 +763,11 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
             f"equations as plain floats cost {over['rhs_float']:.1f} us, which is why the njit f, not the "
             f"generic loop, is the way to beat solve_ivp with a good RHS. "
         )
+    return parts
+
+
+def _reading_heavy_top_fsal(t3, t4, pe) -> list[str]:
+    parts = []
     ok3 = [x for x in t3 if x["ratio"] is not None]
     if ok3:
         lo, hi = min(x["ratio"] for x in ok3), max(x["ratio"] for x in ok3)
@@ -788,6 +793,11 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
             f"and the controller continues from that short step, so {b['outputs']} outputs took {b['steps']} accepted steps "
             f"against {a['steps']} (the engine has no dense output). "
         )
+    return parts
+
+
+def _reading_plateaus(rows, fb_rows, defects) -> list[str]:
+    parts = []
     for name, rr, sel in (("heavy top", rows, lambda r: True), ("free body", fb_rows, lambda r: r.get("variant") == "njit")):
         for m in ("rkmk32", "rkmk45", "rkmk65"):
             pl = plateau([r for r in rr if r["method"] == m and sel(r)])
@@ -800,9 +810,13 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
                 f"a global error term that shrinks only like h.")
             parts.append(f"**{m} on the {name}** stops converging at about {pl[0]:.0e} (its two tightest tolerance "
                          f"decades gain {pl[1]:.1f}x in error).{why} ")
+    return parts
+
+
+def _reading_geometry(rows, fb_rows, ref_info) -> str:
     geom_o = max(r["geom"] for r in rows + fb_rows if r["lib"] == "liegroup_int")
     geom_s = max(r["geom"] for r in rows + fb_rows if r["lib"] == "scipy")
-    parts.append(
+    return (
         f"**Geometry.** R stays orthogonal to {geom_o:.0e} in every run of ours with no projection; the "
         f"quaternion state drifts off the unit sphere by up to {geom_s:.0e} (loosest tolerance; q is normalised "
         f"before the error is measured, which favours scipy). "
@@ -812,6 +826,12 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
         f"on a shared 2-core VM and move by roughly 10-20% between runs; the ratios far from their targets are "
         f"robust to that, those near 1 are not."
     )
+
+
+def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
+    """The prose reading of the results (documentation section)."""
+    parts = (_reading_free_body(fb_rows, t1, t2, over, fpe) + _reading_heavy_top_fsal(t3, t4, pe)
+             + _reading_plateaus(rows, fb_rows, defects) + [_reading_geometry(rows, fb_rows, ref_info)])
     return "\n\n".join(parts)
 
 
