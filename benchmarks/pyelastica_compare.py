@@ -34,7 +34,7 @@ diagnostic evaluated at the output times).
 Usage (from the repository root)::
 
     python benchmarks/pyelastica_compare.py            # full study (~8 min on 2 cores), writes docs/img/pyelastica_*.png
-    python benchmarks/pyelastica_compare.py --quick    # n_elements 25..100, shorter spans, ours n_ctrl 21/31 (no plots)
+    python benchmarks/pyelastica_compare.py --quick    # n_elements 25..100, shorter spans, ours n_ctrl 21/31 (plots in a temp dir)
     python benchmarks/pyelastica_compare.py --cache DIR  # keep/reuse our runs in DIR
 
 Without PyElastica (the ``[peers]`` extra) only our runs are made and tabulated, with a
@@ -249,6 +249,20 @@ def plot_histories(name, res, path):
     a2.set_ylim(bottom=1e-8)
     a2.grid(alpha=0.3, which="both"), a2.legend(fontsize=7, ncol=2)
     a2.set_title(f"difference to our finest run (n_ctrl={res['fine_n']})")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_ours(results, path):
+    """Tip x3 of our runs alone (no peer), one panel per scene."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(results), figsize=(6.5 * len(results), 4.2), squeeze=False)
+    for ax, (name, res) in zip(axes[0], results.items()):
+        for n, o in res["ours"].items():
+            ax.plot(o["t"], o["tip"][:, 2], lw=1.0, label=f"ours n_ctrl={n}")
+        ax.set_xlabel("t [s]"), ax.set_ylabel("tip x3 [m]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+        ax.set_title(f"{name} (PyElastica not installed)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -534,7 +548,7 @@ def print_robustness(rob):
 
 
 def main(argv=None):
-    ap = parser(__doc__, quick_help="n_elements 25..100, shorter spans, ours n_ctrl 21/31; no plots, no robustness part")
+    ap = parser(__doc__, quick_help="n_elements 25..100, shorter spans, ours n_ctrl 21/31; no robustness part; plots in --out")
     ap.add_argument("--cases", nargs="+", default=["pendulum", "cantilever"], choices=list(SETTINGS))
     ap.add_argument("--cache", default=None, help="directory to keep/reuse our runs (npz)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numpy", "numba"),
@@ -574,11 +588,14 @@ def main(argv=None):
     if rob is not None:
         print_robustness(rob)
 
-    if not args.no_plots and P is not None:
+    if not args.no_plots:
         img = figure_dir(args, IMG)
-        for name, res in results.items():
-            plot_histories(name, res, os.path.join(img, f"pyelastica_{name}.png"))
-        plot_convergence(results, os.path.join(img, "pyelastica_convergence.png"))
+        if P is None:
+            plot_ours(results, os.path.join(img, "pyelastica_ours_only.png"))
+        else:
+            for name, res in results.items():
+                plot_histories(name, res, os.path.join(img, f"pyelastica_{name}.png"))
+            plot_convergence(results, os.path.join(img, "pyelastica_convergence.png"))
         print(f"\nplots: {img}/pyelastica_*.png")
     if args.json:
         keep = ("rows", "rows_linear", "ladder", "self_conv", "self_conv_linear", "ref_n", "fine_n", "constants",

@@ -5,7 +5,7 @@ Each runs in a subprocess (``sys.executable``, a temporary working directory, fi
 into ``--out``) and must exit 0 and print at least one Markdown table with a data row in
 which no number is ``nan`` or ``inf`` (``nan``/``inf`` in a table means a
 run failed). Scripts with a PyElastica peer must, without PyElastica, say that the peer
-column is absent rather than skip.
+column is absent rather than skip. A script that draws figures writes them into ``--out``.
 """
 
 from __future__ import annotations
@@ -66,5 +66,9 @@ def test_script_quick_mode(script, tmp_path):
         for row in table:
             bad = [c for c in row if NON_FINITE.search(c)]
             assert not bad, f"{script.name}: non-finite cell in table row {row}"
-    if "pyelastica_peer" in script.read_text() and not peer_available():
+    source = script.read_text()
+    if "pyelastica_peer" in source and not peer_available():
         assert PEER_ABSENT in proc.stdout, f"{script.name}: no note that the peer column is absent"
+    if "savefig" in source:
+        assert list((tmp_path / "out").glob("*.png")), f"{script.name}: draws figures but wrote none into --out"
+    assert not list(tmp_path.glob("docs")), f"{script.name}: wrote into docs/ of its working directory"
