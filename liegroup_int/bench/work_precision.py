@@ -52,9 +52,9 @@ from ..integrators import (
     spectral_radius,
     stable_step,
 )
-from ..problems.beam.damping import size_kelvin_voigt
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
+from .beam_internals import size_kelvin_voigt
 from .plans import Plan
 
 #: Fixed-step factors tried for the peer's stable step, largest first (times its estimate).
