@@ -9,16 +9,19 @@ subnormal numbers).
    kernels the compiled step loop runs per stage) are compiled afresh and their assembly
    counted: adds/subs, muls, FMAs (2 flops), divisions, square roots, libm calls and
    packed (SIMD) instructions, per top-level loop nest of every function in the compile
-   unit, every basic block once (a static count: branches not taken count, inner-loop
-   bodies count once, and a nest that runs once per call, such as the joint rows, counts
-   as if per point). Their sum is the model's flops per collocation point per stage.
+   unit, every basic block once. Their sum is the model's flops per collocation point per
+   stage: a static count, not the work one stage does. It over-counts (both branches of
+   the SO(3) coefficients, Taylor and closed form; nests that run once per call, such as
+   the joint rows, counted as if per point) and under-counts (an inner loop's body once,
+   whatever its trip count); the first over-counts dominate for these kernels, so rates
+   and bound ratios derived from it are upper estimates.
 2. **Timing** (process CPU time, BLAS on one thread, warm-up excluded, best of
    ``--repeats`` batches of >= ``--batch`` s): a whole RKMK4 step through the public driver
    ``integrate_fixed`` (fused: the compiled engine; generic: the Python loop, kept there
    by a no-op monitor), and one call of ``problem.action`` / ``problem.increment_rate``.
-   From these: ns per stage per collocation point, GFLOP/s at the model's flops, and the
-   ratio to the flop bounds of one core at ``--ghz``: scalar FMA 4 flop/cycle (2 FMA
-   ports), AVX2+FMA 16 flop/cycle.
+   From these: ns per stage per collocation point, GFLOP/s at the model's static count,
+   and its ratio to the flop bounds of one core at ``--ghz``: scalar FMA 4 flop/cycle
+   (2 FMA ports), AVX2+FMA 16 flop/cycle (upper estimates, see 1).
 
 Usage (from the repository root)::
 
@@ -79,7 +82,7 @@ def print_model(counts) -> int:
     for kc in counts:
         for nest in kc.nests:
             rows.append([kc.name, short_name(nest.function), nest.blocks, *op_cells(nest.ops)])
-    print("### Flop model: top-level loop nests of the compiled kernels (every block once)\n")
+    print("### Flop model: top-level loop nests of the compiled kernels (static: every block once)\n")
     print(markdown(["kernel", "function", "blocks", *OP_HEAD], rows))
     total = sum(kc.per_point.flops for kc in counts)
     print()
@@ -119,9 +122,9 @@ def main(args) -> None:
     flops = print_model(flop_model(sizes[0]))
     print(f"\n(model: {time.process_time() - c0:.1f} s CPU to compile and count)\n")
     print(f"### Timing (process CPU, best of {args.repeats} batches >= {args.batch} s; bounds at {args.ghz} GHz)\n")
-    print(markdown(["n_ctrl", "fused step [us]", "fused ns/stage/point", "GFLOP/s (model)",
-                    "% scalar-FMA bound", "% AVX2 bound", "generic ns/stage/point", "action call ns/point",
-                    "rate call ns/point"], [measure(n, args, flops) for n in sizes]))
+    print(markdown(["n_ctrl", "fused step [us]", "fused ns/stage/point", "GFLOP/s (static count)",
+                    "% scalar-FMA bound (static count)", "% AVX2 bound (static count)", "generic ns/stage/point",
+                    "action call ns/point", "rate call ns/point"], [measure(n, args, flops) for n in sizes]))
 
 
 if __name__ == "__main__":
