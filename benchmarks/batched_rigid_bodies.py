@@ -13,13 +13,13 @@ body does not depend on N); the subset size is printed.
 
 from __future__ import annotations
 
-import argparse
-import time
-
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
 
 from liegroup_int import SO3, integrate
+from liegroup_int.bench.table import markdown, parser
+from liegroup_int.bench.timing import cpu
 from liegroup_int.problems import RigidBody
 
 TOP = RigidBody(inertia=(1.0, 0.8, 0.5), mass=1.0, com=(0.0, 0.0, 0.5), gravity=9.81)
@@ -59,48 +59,49 @@ def error(R, W, Rr, Wr):
     return float(np.max(np.linalg.norm(R - Rr, axis=(-2, -1)) + np.linalg.norm(W - Wr, axis=-1)))
 
 
+def scipy_bodies(R0, W0, sub, T, tol):
+    """End attitudes and spins of the bodies ``sub`` by DOP853 at ``rtol = atol = tol``."""
+    Rs, Ws = [], []
+    for i in sub:
+        q = Rotation.from_matrix(R0[i]).as_quat()  # (x, y, z, w)
+        x0 = np.concatenate([[q[3]], q[:3], W0[i]])
+        s = solve_ivp(quat_rhs, (0.0, T), x0, method="DOP853", rtol=tol, atol=tol)
+        Rs.append(quat_to_R(s.y[:4, -1]))
+        Ws.append(s.y[4:, -1])
+    return np.array(Rs), np.array(Ws)
+
+
+def compare(method, h, R0, W0, y0, T, n, subset):
+    """One row: ours at step ``h``, then DOP853 tightened until its error is <= ours."""
+    ref = integrate(TOP.problem(), y0, (0.0, T), method="rkmk6", dt=h / 4).y_final
+    Rr, Wr = TOP.split(ref)
+    sol, cpu_ours = cpu(lambda: integrate(TOP.problem(), y0, (0.0, T), method=method, dt=h))
+    err = error(*TOP.split(sol.y_final), Rr, Wr)
+    sub = np.arange(subset)
+    for tol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
+        (Rs, Ws), cpu_s = cpu(lambda: scipy_bodies(R0, W0, sub, T, tol))
+        err_s = error(Rs, Ws, Rr[sub], Wr[sub])
+        if err_s <= err:
+            break
+    cpu_s *= n / subset
+    return [method, f"{h:.3g}", f"{err:.2e}", f"{cpu_ours:.3g}", f"{tol:.0e}", f"{err_s:.2e}", f"{cpu_s:.3g}",
+            f"{cpu_s / cpu_ours:.1f}x"]
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser()
+    ap = parser(__doc__)
     ap.add_argument("--n", type=int, default=10_000)
     ap.add_argument("--T", type=float, default=2.0)
     ap.add_argument("--subset", type=int, default=200, help="bodies timed with solve_ivp")
-    ap.add_argument("--quick", action="store_true")
     a = ap.parse_args(argv)
     if a.quick:
-        a.n, a.subset = 1000, 50
+        a.n, a.subset, a.T = 200, 5, 0.2
     R0, W0 = initial_states(a.n)
     y0 = TOP.state(R0, W0)
-    rows = []
-    for method, h in (("rkmk4", 0.01), ("rkmk6", 0.02)):
-        ref = integrate(TOP.problem(), y0, (0.0, a.T), method="rkmk6", dt=h / 4).y_final
-        Rr, Wr = TOP.split(ref)
-        t0 = time.process_time()
-        sol = integrate(TOP.problem(), y0, (0.0, a.T), method=method, dt=h)
-        cpu = time.process_time() - t0
-        R, W = TOP.split(sol.y_final)
-        err = error(R, W, Rr, Wr)
-        # scipy: tighten the tolerance until its error (on the subset) is <= ours
-        sub = np.arange(a.subset)
-        for tol in (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12):
-            t1 = time.process_time()
-            Rs, Ws = [], []
-            for i in sub:
-                from scipy.spatial.transform import Rotation
-
-                q = Rotation.from_matrix(R0[i]).as_quat()  # (x, y, z, w)
-                x0 = np.concatenate([[q[3]], q[:3], W0[i]])
-                s = solve_ivp(quat_rhs, (0.0, a.T), x0, method="DOP853", rtol=tol, atol=tol)
-                Rs.append(quat_to_R(s.y[:4, -1]))
-                Ws.append(s.y[4:, -1])
-            cpu_s = (time.process_time() - t1) * a.n / a.subset
-            err_s = error(np.array(Rs), np.array(Ws), Rr[sub], Wr[sub])
-            if err_s <= err:
-                break
-        rows.append((method, h, err, cpu, tol, err_s, cpu_s))
-    print(f"{a.n} heavy tops over T = {a.T} s; solve_ivp timed on {a.subset} bodies and scaled to {a.n}")
-    print(f"{'ours':8s} {'h':>7s} {'max error':>10s} {'CPU s':>8s} | {'DOP853 tol':>10s} {'max error':>10s} {'CPU s':>8s} | ratio")
-    for m, h, e, c, tol, es, cs in rows:
-        print(f"{m:8s} {h:7.3g} {e:10.2e} {c:8.2f} | {tol:10.0e} {es:10.2e} {cs:8.2f} | {cs / c:5.1f}x")
+    rows = [compare(method, h, R0, W0, y0, a.T, a.n, a.subset) for method, h in (("rkmk4", 0.01), ("rkmk6", 0.02))]
+    print(f"{a.n} heavy tops over T = {a.T} s; solve_ivp timed on {a.subset} bodies and scaled to {a.n}\n")
+    print(markdown(["ours", "h", "max error", "CPU s", "DOP853 tol", "DOP853 max error", "DOP853 CPU s",
+                    "ratio DOP853 / ours"], rows))
     return rows
 
 

@@ -10,9 +10,9 @@ Five studies, all on the built-in scenes of ``liegroup_int/scenes/builtin``:
    The round-off floor of each measure is the difference between two RKMK6 runs at
    ``|lambda| h = 0.05`` and ``0.1`` (their time errors are far below it); points within 10x
    of a floor are left out of that measure's fit. Step sizes are given as
-   ``y = |lambda|max h`` (method.md 3b: a load switched on at t = 0 excites the top of the
-   spectrum, so orders are only visible for y <~ 0.3; RKMK2 grows those modes by y^4/8 per
-   step and is kept to N y^4 << 1).
+   ``y = |lambda|max h`` (a load switched on at t = 0 excites the top of the spectrum, so
+   orders are only visible for y <~ 0.3; RKMK2 grows those modes by y^4/8 per step and is
+   kept to N y^4 << 1).
 2. **Space convergence** (paper Fig. 4(c)/5(c)). p = 2, 3, 4, 6, 8 (and 5, 7 for the smooth
    loads) against n_ctrl = 11..81
    at ``y = 0.3`` of each discretization (RKMK6 for the loads switched on at t = 0, whose
@@ -48,7 +48,7 @@ Five studies, all on the built-in scenes of ``liegroup_int/scenes/builtin``:
 Usage (from the repository root)::
 
     python benchmarks/beam_convergence.py            # all studies, PNGs in docs/img
-    python benchmarks/beam_convergence.py --quick    # smoke version (~1 min), PNGs in /tmp
+    python benchmarks/beam_convergence.py --quick    # smoke version (seconds), PNGs in a temp dir or --out
     python benchmarks/beam_convergence.py --studies 1 3
     python benchmarks/beam_convergence.py --stability-scan cantilever
         # dense eigenvalues of the linearized semi-discrete operator at rest for
@@ -60,18 +60,17 @@ markdown; ``--markdown FILE`` also writes them to FILE.
 
 from __future__ import annotations
 
-import argparse
 import os
 import platform
-import sys
 import time
+
+from liegroup_int.bench.table import figure_dir, parser
 
 
 def _parse():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="fast smoke version; figures go to /tmp")
+    ap = parser(__doc__, quick_help="smoke version (tiny meshes and spans); figures in a temporary directory")
     ap.add_argument("--studies", type=int, nargs="*", default=[1, 2, 3, 4, 5])
-    ap.add_argument("--figdir", default=None, help="where to write the PNGs (default docs/img, /tmp with --quick)")
+    ap.add_argument("--figdir", default=None, help="where to write the PNGs (same as --out)")
     ap.add_argument("--markdown", default=None, help="also write the printed tables to this file")
     ap.add_argument("--threads", default="1", help="BLAS threads")
     ap.add_argument("--stability-scan", default=None, metavar="SCENE",
@@ -89,14 +88,18 @@ if ARGS is not None and ARGS.threads:
         os.environ[var] = str(ARGS.threads)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
 
-import numpy as np  # noqa: E402
+import numpy as np  # noqa: E402  (after the BLAS thread count is set)
 import scipy.optimize  # noqa: E402
 
-from liegroup_int.integrators import integrate_fixed, resolve_method, spectral_radius  # noqa: E402
-from liegroup_int.integrators.result import BlowUpError, StepSizeError  # noqa: E402
+from liegroup_int.integrators import (  # noqa: E402
+    BlowUpError,
+    StepSizeError,
+    eigenvalues,
+    integrate_fixed,
+    resolve_method,
+    spectral_radius,
+)
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem  # noqa: E402
 from liegroup_int.studies import fit_rate  # noqa: E402
@@ -165,13 +168,28 @@ TIME_CASES = {
     }),
 }
 TIME_CASES_QUICK = {
-    "pendulum": (0.01, 0.1, {"rkmk2": [0.3, 0.21, 0.15], "rkmk3": [0.3, 0.21, 0.15],
-                             "rkmk4": [0.42, 0.3, 0.21], "rkmk6": [0.85, 0.6, 0.42]}),
-    "cantilever": (2e-4, 0.1, {"rkmk2": [0.075, 0.0525, 0.0375], "rkmk3": [0.3, 0.21, 0.15],
-                               "rkmk4": [0.3, 0.21, 0.15], "rkmk6": [0.6, 0.42, 0.3]}),
+    "pendulum": (0.005, 0.1, {"rkmk2": [0.3, 0.21, 0.15], "rkmk4": [0.42, 0.3, 0.21]}),
 }
+TIME_N_CTRL, TIME_N_CTRL_QUICK = 31, 11
 ORDER = {"rkmk2": 2, "rkmk3": 3, "rkmk4": 4, "rkmk6": 6}
 MEASURES = ("e_c", "e_v", "err_L2")
+
+
+def fit_cells(pts: list, floor: dict) -> tuple[list, dict]:
+    """Fitted slopes of each measure over the points above 10x its floor: table cells and
+    ``{measure: slope}`` (nan below 3 points)."""
+    cells, fitted = [], {}
+    for k in MEASURES:
+        ok = [p for p in pts if np.isfinite(p[k]) and p[k] > 10 * floor[k]]
+        if len(ok) >= 3:
+            s = slope([p["h"] for p in ok], [p[k] for p in ok])
+            y_lo, y_hi = min(p["y"] for p in ok), max(p["y"] for p in ok)
+            cells.append(f"**{s:.2f}** ({len(ok)} pts, y {y_lo:.3g}-{y_hi:.3g})")
+        else:
+            s = np.nan
+            cells.append(f"below floor ({len(ok)} pts)")
+        fitted[k] = s
+    return cells, fitted
 
 
 def time_study(quick: bool) -> dict:
@@ -180,7 +198,8 @@ def time_study(quick: bool) -> dict:
     results = {}
     fit_rows = []
     for scene, (T, y_ref, windows) in cases.items():
-        pb, y0, lam = make(scene, {"space.degree": 4, "space.n_ctrl": 31})
+        n_ctrl = TIME_N_CTRL_QUICK if quick else TIME_N_CTRL
+        pb, y0, lam = make(scene, {"space.degree": 4, "space.n_ctrl": n_ctrl})
         C0 = pb.centreline(y0, ug)
         N, h = steps_for(T, lam, y_ref)
         ref, cpu_ref, _ = run(pb, y0, "rkmk6", T, h)
@@ -193,7 +212,7 @@ def time_study(quick: bool) -> dict:
                     "err_L2": float(np.linalg.norm(pb.centreline(y, ug) - C0 - u_r) / np.linalg.norm(u_r))}
 
         floor = errors(ref2)
-        emit(f"### {scene}: p = 4, n_ctrl = 31, T = {T:g} s, |lambda|max = {lam:.4g} 1/s")
+        emit(f"### {scene}: p = 4, n_ctrl = {n_ctrl}, T = {T:g} s, |lambda|max = {lam:.4g} 1/s")
         emit()
         emit(f"Reference: RKMK6, |lambda| h = {lam * h:.3f} (h = {h:.4g} s, {N} steps, {cpu_ref:.1f} s CPU); "
              f"|u_r| = {np.linalg.norm(u_r):.4g} m over 101 points. Round-off floors (reference vs RKMK6 at "
@@ -219,16 +238,8 @@ def time_study(quick: bool) -> dict:
         table(["method", "\\|lambda\\| h", "h [s]", "steps", "CPU s", "e_c [m] (local slope)",
                "e_v [m/s] (local slope)", "err_L2 (local slope)"], rows)
         for m, pts in per.items():
-            cells = []
-            for k in MEASURES:
-                ok = [p for p in pts if np.isfinite(p[k]) and p[k] > 10 * floor[k]]
-                if len(ok) >= 3:
-                    s = slope([p["h"] for p in ok], [p[k] for p in ok])
-                    y_lo, y_hi = min(p["y"] for p in ok), max(p["y"] for p in ok)
-                    cells.append(f"**{s:.2f}** ({len(ok)} pts, y {y_lo:.3g}-{y_hi:.3g})")
-                else:
-                    cells.append(f"below floor ({len(ok)} pts)")
-                results.setdefault(scene, {}).setdefault(m, {})[k] = (s if len(ok) >= 3 else np.nan)
+            cells, fitted = fit_cells(pts, floor)
+            results.setdefault(scene, {})[m] = fitted
             fit_rows.append([scene, m, str(ORDER[m]), f"{pts[-1]['y']:.3g}-{pts[0]['y']:.3g}", *cells])
         results[scene]["_runs"] = per
         results[scene]["_floor"] = floor
@@ -313,7 +324,8 @@ SPACE_CASES = [
      {"loads.end.profile": "smooth", "loads.end.ramp": 1e-3}, 1e-3, "rkmk4", [2, 3, 4, 5, 6, 7, 8]),
 ]
 SPACE_NS, SPACE_REF = [11, 21, 31, 41, 61, 81], (8, 121)
-SPACE_PS_QUICK, SPACE_NS_QUICK, SPACE_REF_QUICK = [2, 4], [11, 21, 31], (6, 41)
+SPACE_PS_QUICK, SPACE_NS_QUICK, SPACE_REF_QUICK = [2], [11, 15, 21], (4, 31)
+SPACE_T_QUICK = 0.01  # the first case (pendulum) only
 SPACE_Y = 0.3
 GROWTH_LIMIT = 10.0  # growth probe: max|w| growth over T/5 above this marks "unstable"
 
@@ -341,9 +353,50 @@ def growth_probe(scene: str, overrides: dict, T: float) -> float:
         return np.inf
 
 
+def space_tables(res: dict, ps, ns) -> dict:
+    """Emits the error table and the fitted rates of one space study; returns ``{p: rate}``."""
+    rows = []
+    for p in ps:
+        cells = []
+        for n in ns:
+            r = res.get((p, n))
+            if r is None:
+                cells.append("")
+                continue
+            cells.append(fmt(r["e"], 2) + (" (unstable)" if r["growth"] > GROWTH_LIMIT else ""))
+        rows.append([str(p), *cells])
+    emit("err_L2 by degree p (rows) and n_ctrl (columns):")
+    emit()
+    table(["p \\ n_ctrl", *map(str, ns)], rows)
+    rate_rows = []
+    rates = {}
+    for p in ps:
+        pts = [(n, res[(p, n)]) for n in ns if (p, n) in res]
+        good = [(n, r) for n, r in pts if r["growth"] <= GROWTH_LIMIT][-4:]
+        bad = [n for n, r in pts if r["growth"] > GROWTH_LIMIT]
+        if len(good) >= 3:
+            hs = [r["h"] for _, r in good]
+            s2 = slope(hs, [r["e"] for _, r in good])
+            sm = slope(hs, [r["emax"] for _, r in good])
+            loc = [np.log(a["e"] / b["e"]) / np.log(a["h"] / b["h"]) for (_, a), (_, b) in zip(good[:-1], good[1:])]
+        else:
+            s2 = sm = np.nan
+            loc = []
+        rates[p] = s2
+        expected = p if p % 2 == 0 else p - 1
+        rate_rows.append([str(p), str(expected), ", ".join(str(n) for n, _ in good), f"**{s2:.2f}**",
+                          f"{sm:.2f}", ", ".join(f"{x:.2f}" for x in loc),
+                          ", ".join(f"{n} (x{res[(p, n)]['growth']:.2g})" for n in bad) or "-"])
+    emit("Fitted rates against h = 1/(n_ctrl - p) (finest four stable meshes):")
+    emit()
+    table(["p", "Greville rate (p even: p, odd: p-1)", "n_ctrl used", "rate err_L2", "rate max-norm",
+           "local rates err_L2", "unstable (growth over T/5)"], rate_rows)
+    return rates
+
+
 def space_study(quick: bool) -> list:
     ns, ref_pn = (SPACE_NS_QUICK, SPACE_REF_QUICK) if quick else (SPACE_NS, SPACE_REF)
-    cases = SPACE_CASES[::2] if quick else SPACE_CASES
+    cases = [(*SPACE_CASES[0][:3], SPACE_T_QUICK, *SPACE_CASES[0][4:])] if quick else SPACE_CASES
     if ARGS is not None and ARGS.smooth_only:
         cases = [c for c in cases if "smooth" in c[1]]
     ug = np.linspace(0.0, 1.0, 201)
@@ -380,42 +433,7 @@ def space_study(quick: bool) -> list:
                 g = growth_probe(scene, {**ov, "space.degree": p, "space.n_ctrl": n}, T / 5)
                 res[(p, n)] = dict(e=float(np.linalg.norm(u - u_r) / nr), emax=float(np.abs(u - u_r).max()),
                                    cpu=cpu, lam=lam, N=N, growth=g, h=1.0 / (n - p))
-        rows = []
-        for p in ps:
-            cells = []
-            for n in ns:
-                r = res.get((p, n))
-                if r is None:
-                    cells.append("")
-                    continue
-                cells.append(fmt(r["e"], 2) + (" (unstable)" if r["growth"] > GROWTH_LIMIT else ""))
-            rows.append([str(p), *cells])
-        emit("err_L2 by degree p (rows) and n_ctrl (columns):")
-        emit()
-        table(["p \\ n_ctrl", *map(str, ns)], rows)
-        rate_rows = []
-        rates = {}
-        for p in ps:
-            pts = [(n, res[(p, n)]) for n in ns if (p, n) in res]
-            good = [(n, r) for n, r in pts if r["growth"] <= GROWTH_LIMIT][-4:]
-            bad = [n for n, r in pts if r["growth"] > GROWTH_LIMIT]
-            if len(good) >= 3:
-                hs = [r["h"] for _, r in good]
-                s2 = slope(hs, [r["e"] for _, r in good])
-                sm = slope(hs, [r["emax"] for _, r in good])
-                loc = [np.log(a["e"] / b["e"]) / np.log(a["h"] / b["h"]) for (_, a), (_, b) in zip(good[:-1], good[1:])]
-            else:
-                s2 = sm = np.nan
-                loc = []
-            rates[p] = s2
-            expected = p if p % 2 == 0 else p - 1
-            rate_rows.append([str(p), str(expected), ", ".join(str(n) for n, _ in good), f"**{s2:.2f}**",
-                              f"{sm:.2f}", ", ".join(f"{x:.2f}" for x in loc),
-                              ", ".join(f"{n} (x{res[(p, n)]['growth']:.2g})" for n in bad) or "-"])
-        emit("Fitted rates against h = 1/(n_ctrl - p) (finest four stable meshes):")
-        emit()
-        table(["p", "Greville rate (p even: p, odd: p-1)", "n_ctrl used", "rate err_L2", "rate max-norm",
-               "local rates err_L2", "unstable (growth over T/5)"], rate_rows)
+        rates = space_tables(res, ps, ns)
         cpu_all = sum(r["cpu"] for r in res.values())
         emit(f"(CPU of the {len(res)} runs: {cpu_all:.1f} s; largest growth factor among the stable ones: "
              f"{max(r['growth'] for r in res.values() if r['growth'] <= GROWTH_LIMIT):.2g})")
@@ -477,11 +495,11 @@ def eb_mode(x, k, L=1.0):
     return phi / tip, dphi / tip
 
 
-def timoshenko_frequencies(EI, GA, rhoA, rhoI, L, guesses):
+def timoshenko_frequencies(EI, GA, rhoA, rhoI, L, guesses, grid: int = 41):
     """Clamped-free linear Timoshenko beam (Hz): roots of the 2x2 end determinant of the
     transfer matrix ``expm(A L)``, in 50-digit arithmetic (mpmath). In double precision
     the transfer matrix has entries ~exp(L sqrt(GA/EI)) ~ 1e97 and the roots come out
-    ~2e-6 off."""
+    ~2e-6 off. Each root is bracketed on ``grid`` points below the guess, then refined."""
     import mpmath as mp
 
     mp.mp.dps = 50
@@ -498,7 +516,7 @@ def timoshenko_frequencies(EI, GA, rhoA, rhoI, L, guesses):
     out = []
     for g in guesses:
         # bracket the root just below the Euler-Bernoulli value (shear and rotary inertia lower it)
-        fs = np.linspace(0.97 * g, 1.001 * g, 41)
+        fs = np.linspace(0.97 * g, 1.001 * g, grid)
         d = [float(mp.sign(det(mp.mpf(f)))) for f in fs]
         i = [k for k in range(len(d) - 1) if d[k] != d[k + 1]][-1]
         out.append(float(mp.findroot(det, (mp.mpf(fs[i]), mp.mpf(fs[i + 1])), solver="anderson")))
@@ -553,8 +571,30 @@ def identify_modes(t, z, k):
     return f[order], amps[order], float(np.sqrt(np.mean(res**2)))
 
 
+def operator_frequencies(grid, f_ti) -> None:
+    """Study 3b: the first three frequencies of the linearized semi-discrete operator at
+    rest over ``grid = (degrees, n_ctrl values)``, against Timoshenko's ``f_ti``."""
+    ps3, ns3 = grid
+    rows = []
+    for p in ps3:
+        for n in ns3:
+            pb, y0, lam = make("cantilever", {"space.degree": p, "space.n_ctrl": n, "loads.end.force": [0.0, 0.0, 0.0]})
+            ev = eigenvalues(pb, 0.0, y0)
+            f = np.sort(np.abs(ev.imag[ev.imag > 1e-6])) / (2 * np.pi)
+            uniq = []  # bending modes come in pairs (two planes of a square section)
+            for x in f:
+                if not uniq or x - uniq[-1] > 1e-7 * x:
+                    uniq.append(x)
+            f = np.array(uniq[:3])
+            rows.append([str(p), str(n), *[f"{f[k]:.6f} ({(f[k] - f_ti[k]) / f_ti[k]:+.2e})" for k in range(3)],
+                         f"{ev.real.max():.1e}"])
+    emit("3b. Frequencies of the linearized semi-discrete operator at rest, Hz (relative error vs Timoshenko):")
+    emit()
+    table(["p", "n_ctrl", "f1", "f2", "f3", "max Re(lambda) 1/s"], rows)
+
+
 def frequency_study(quick: bool) -> dict:
-    T = 0.1 if quick else 0.5
+    T = 0.05 if quick else 0.5
     n_list = [11] if quick else [11, 21, 31]
     y_step = 2.0
     dt_out = 2.5e-4
@@ -562,7 +602,7 @@ def frequency_study(quick: bool) -> dict:
     C = pb0.constants
     EI, GA, rhoA, rhoI = C.CM[0], C.CN[0], C.mu, C.Jm[0]
     f_eb = BETA_L**2 / (2 * np.pi) * np.sqrt(EI / rhoA)
-    f_ti = timoshenko_frequencies(EI, GA, rhoA, rhoI, 1.0, f_eb[:3])
+    f_ti = timoshenko_frequencies(EI, GA, rhoA, rhoI, 1.0, f_eb[:3], grid=7 if quick else 41)
     emit(f"Section constants of the scene: EI = {EI:.6g} N m^2, GA = {GA:.6g} N (shear factor 1), "
          f"rhoA = {rhoA:.6g} kg/m, rhoI = {rhoI:.6g} kg m.")
     emit(f"Euler-Bernoulli f1..f3 = {', '.join(f'{f:.6f}' for f in f_eb[:3])} Hz; linear Timoshenko (same constants) "
@@ -609,26 +649,7 @@ def frequency_study(quick: bool) -> dict:
     emit()
     table(["n_ctrl", "\\|lambda\\|max", "\\|lambda\\| h", "steps", "CPU s", "f1 [Hz]", "vs EB", "vs Timo.",
            "f1 Hann-FFT", "f2 [Hz]", "vs EB", "vs Timo.", "f3 [Hz]", "vs EB", "vs Timo.", "fit rms / amp1"], rows)
-    # 3b: frequencies of the linearized semi-discrete operator
-    from liegroup_int.integrators.spectrum import eigenvalues
-
-    ps3, ns3 = ([4], [11, 21]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61])
-    rows = []
-    for p in ps3:
-        for n in ns3:
-            pb, y0, lam = make("cantilever", {"space.degree": p, "space.n_ctrl": n, "loads.end.force": [0.0, 0.0, 0.0]})
-            ev = eigenvalues(pb, 0.0, y0)
-            f = np.sort(np.abs(ev.imag[ev.imag > 1e-6])) / (2 * np.pi)
-            uniq = []  # bending modes come in pairs (two planes of a square section)
-            for x in f:
-                if not uniq or x - uniq[-1] > 1e-7 * x:
-                    uniq.append(x)
-            f = np.array(uniq[:3])
-            rows.append([str(p), str(n), *[f"{f[k]:.6f} ({(f[k] - f_ti[k]) / f_ti[k]:+.2e})" for k in range(3)],
-                         f"{ev.real.max():.1e}"])
-    emit("3b. Frequencies of the linearized semi-discrete operator at rest, Hz (relative error vs Timoshenko):")
-    emit()
-    table(["p", "n_ctrl", "f1", "f2", "f3", "max Re(lambda) 1/s"], rows)
+    operator_frequencies(([4], [11]) if quick else ([2, 3, 4, 6], [11, 21, 31, 61]), f_ti)
     return dict(hist=hist, f_eb=f_eb, f_ti=f_ti)
 
 
@@ -642,8 +663,7 @@ SCENE_RUNS = {
     "arch": (1.0, 1e-3, 0.25),
     "spinning_helix": (1.0, 0.005, 0.0),
 }
-SCENE_RUNS_QUICK = {"pendulum": (0.1, 0.005, 0.0), "cantilever": (0.005, 2.5e-4, 0.0),
-                    "arch": (0.02, 1e-4, 0.01), "spinning_helix": (0.1, 0.005, 0.0)}
+SCENE_RUNS_QUICK = {"pendulum": (0.01, 0.002, 0.0), "cantilever": (5e-4, 1e-4, 0.0)}
 
 
 class Recorder:
@@ -684,6 +704,31 @@ def _scene_run(scene, overrides, T, every, dt, method, t_ref):
 CHECK_SPANS = {"pendulum": 0.2, "cantilever": 0.005, "arch": 0.01, "spinning_helix": 0.1}
 
 
+def scene_summaries(out: dict, quick: bool) -> None:
+    """Emits the arch's and the helix's figures from their runs (when run)."""
+    if "arch" in out:
+        a = out["arch"]
+        t_off = 0.01 if quick else 0.25
+        on = a["t"] < t_off
+        x1 = a["tip"][:, 0]
+        emit(f"Arch tip x1 while the couple acts (t < {t_off:g} s): min {x1[on].min():.4f} m, max {x1[on].max():.4f} m "
+             f"(3/(2 pi) = {3 / (2 * np.pi):.4f}); after removal: min {x1[~on].min():.4f}, max {x1[~on].max():.4f} m; "
+             f"tip x2 range [{a['tip'][:, 1].min():.4f}, {a['tip'][:, 1].max():.4f}] m. Tip curvature k3 = (R K)_3: "
+             f"initial {a['ktip'][0, 2]:.4f} 1/m (-pi/3 = {-np.pi / 3:.4f}), range "
+             f"[{a['ktip'][1:, 2][on[1:]].min():.4f}, {a['ktip'][1:, 2][on[1:]].max():.4f}] while on (t > 0), "
+             f"[{a['ktip'][~on, 2].min():.4f}, {a['ktip'][~on, 2].max():.4f}] after; at the middle collocation "
+             f"point [{a['kmid'][on, 2].min():.4f}, {a['kmid'][on, 2].max():.4f}] while on, "
+             f"[{a['kmid'][~on, 2].min():.4f}, {a['kmid'][~on, 2].max():.4f}] after.")
+        emit()
+    if "spinning_helix" in out:
+        a = out["spinning_helix"]
+        u = a["tip"] - a["tip"][0]
+        emit(f"Spinning helix tip displacement range over the span: u1 [{u[:, 0].min():.4f}, {u[:, 0].max():.4f}], "
+             f"u2 [{u[:, 1].min():.4f}, {u[:, 1].max():.4f}], u3 [{u[:, 2].min():.4f}, {u[:, 2].max():.4f}] m; "
+             f"h3(0) = {a['h'][0, 2]:.6g} kg m^2/s.")
+        emit()
+
+
 def scene_study(quick: bool) -> dict:
     runs = SCENE_RUNS_QUICK if quick else SCENE_RUNS
     out = {}
@@ -708,7 +753,7 @@ def scene_study(quick: bool) -> dict:
             add(scene, f"n_ctrl = {n2}, dt/2", T, method, dt / 2, t_ref, r)
         # time integrator vs space: the same short span with the scene's RKMK4 step and with
         # RKMK6 at |lambda| dt = 0.3 (the arch: a 2 ms couple pulse, drift over 2-10 ms)
-        Tc = CHECK_SPANS[scene] if not quick else CHECK_SPANS[scene] / 4
+        Tc = CHECK_SPANS[scene] if not quick else T / 2
         ev_c = min(every, Tc / 20)
         ov_c = {"loads.end.t_off": 0.002} if scene == "arch" else {}
         tr_c = 0.002 if scene == "arch" else t_ref
@@ -729,27 +774,7 @@ def scene_study(quick: bool) -> dict:
     emit()
     table(["scene", "variant", "span s", "method", "dt s", "\\|lambda\\| dt", "steps", "CPU s", "t_ref s",
            "KE scale J", "energy drift / KE scale", "max orth. err.", "axial ang. mom. drift (rel.)"], rows)
-    if "arch" in out:
-        a = out["arch"]
-        t_off = 0.01 if quick else 0.25
-        on = a["t"] < t_off
-        x1 = a["tip"][:, 0]
-        emit(f"Arch tip x1 while the couple acts (t < {t_off:g} s): min {x1[on].min():.4f} m, max {x1[on].max():.4f} m "
-             f"(3/(2 pi) = {3 / (2 * np.pi):.4f}); after removal: min {x1[~on].min():.4f}, max {x1[~on].max():.4f} m; "
-             f"tip x2 range [{a['tip'][:, 1].min():.4f}, {a['tip'][:, 1].max():.4f}] m. Tip curvature k3 = (R K)_3: "
-             f"initial {a['ktip'][0, 2]:.4f} 1/m (-pi/3 = {-np.pi / 3:.4f}), range "
-             f"[{a['ktip'][1:, 2][on[1:]].min():.4f}, {a['ktip'][1:, 2][on[1:]].max():.4f}] while on (t > 0), "
-             f"[{a['ktip'][~on, 2].min():.4f}, {a['ktip'][~on, 2].max():.4f}] after; at the middle collocation "
-             f"point [{a['kmid'][on, 2].min():.4f}, {a['kmid'][on, 2].max():.4f}] while on, "
-             f"[{a['kmid'][~on, 2].min():.4f}, {a['kmid'][~on, 2].max():.4f}] after.")
-        emit()
-    if "spinning_helix" in out:
-        a = out["spinning_helix"]
-        u = a["tip"] - a["tip"][0]
-        emit(f"Spinning helix tip displacement range over the span: u1 [{u[:, 0].min():.4f}, {u[:, 0].max():.4f}], "
-             f"u2 [{u[:, 1].min():.4f}, {u[:, 1].max():.4f}], u3 [{u[:, 2].min():.4f}, {u[:, 2].max():.4f}] m; "
-             f"h3(0) = {a['h'][0, 2]:.6g} kg m^2/s.")
-        emit()
+    scene_summaries(out, quick)
     return out
 
 
@@ -855,8 +880,6 @@ def plot_frequency(fr: dict, path: str) -> None:
 
 # ---------------------------------------------------------------------------------------
 def stability_scan(scene: str) -> None:
-    from liegroup_int.integrators.spectrum import eigenvalues
-
     ns = [11, 16, 21, 31, 41, 51, 61, 71, 81, 91, 101, 121]
     emit(f"max Re(lambda) [1/s] of the linearized increment map at rest, {scene} (dense, central differences)")
     emit()
@@ -876,8 +899,9 @@ def main(args) -> None:
     import matplotlib
     import numba
 
-    figdir = args.figdir or ("/tmp" if args.quick else os.path.join(ROOT, "docs", "img"))
-    os.makedirs(figdir, exist_ok=True)
+    if args.figdir:
+        args.out = args.figdir
+    figdir = str(figure_dir(args, os.path.join(ROOT, "docs", "img")))
     t_start = CLOCK()
     w_start = time.perf_counter()
     emit(f"<!-- beam_convergence.py {'--quick ' if args.quick else ''}studies {args.studies}: python "

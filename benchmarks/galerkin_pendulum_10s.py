@@ -15,7 +15,7 @@ Peer: PyElastica ``CosseratRod`` with our section constants
 (``liegroup_int/bench/pyelastica_peer.py``), ``PositionVerlet``, undamped, 50 / 100 / 200
 elements. Step as in ``benchmarks/pyelastica_compare.py``: the largest stable step
 ``dt_max`` of its ladder ``f * dt_est`` is searched over the first ``min(T, 1)`` s
-(``find_dt_max``), then the run uses ``dt = dt_max / 2`` (rounded down to divide the output
+(``liegroup_int.bench.work_precision.peer_dt_max``), then the run uses ``dt = dt_max / 2`` (rounded down to divide the output
 interval) over the whole span; should that run not stay finite (|tip| < 2 L) the step is
 halved again (reported). The helper records the tip only, so PyElastica's energy is n/a.
 
@@ -30,33 +30,30 @@ their cost is printed separately). Plot: ``docs/img/galerkin_pendulum_10s.png``.
 Usage (from the repository root)::
 
     python benchmarks/galerkin_pendulum_10s.py           # full run (a few minutes of CPU), writes the plot
-    python benchmarks/galerkin_pendulum_10s.py --quick   # T = 2 s, ours n_ctrl 21/31, PyElastica 50/100, no plot
+    python benchmarks/galerkin_pendulum_10s.py --quick   # T = 0.2 s, ours n_ctrl 11 at two steps, PyElastica 50
     python benchmarks/galerkin_pendulum_10s.py --save runs.npz   # also keep the histories (t, tip, E, KE)
+
+Without PyElastica (the ``[peers]`` extra) only our runs are made and tabulated, with a
+note that the peer rows are absent.
 """
 
 from __future__ import annotations
 
-import argparse
 import os
-import sys
 import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np  # noqa: E402  (after the thread count is set)
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-HERE = os.path.dirname(os.path.abspath(__file__))
-for _p in (ROOT, HERE):
-    if _p not in sys.path:
-        sys.path.insert(0, _p)
-
-from liegroup_int.bench.work_precision import fit_step  # noqa: E402
+from liegroup_int.bench.table import PEER_ABSENT, figure_dir, parser, peer_available  # noqa: E402
+from liegroup_int.bench.work_precision import fit_step, peer_dt_max  # noqa: E402
 from liegroup_int.integrators import integrate_fixed, resolve_method, spectral_radius  # noqa: E402
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem  # noqa: E402
 
-IMG = os.path.join(ROOT, "docs", "img", "galerkin_pendulum_10s.png")
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+IMG = os.path.join(ROOT, "docs", "img")
 EVERY = 0.01
 TIP_TIMES = (1.0, 2.0, 5.0, 10.0)
 WINDOWS = (1.0, 2.0, 5.0, 10.0)
@@ -64,7 +61,8 @@ DRIFT_WINDOWS = (2.0, 10.0)
 THRESHOLDS = (1e-4, 1e-3, 1e-2)   # first time the tip distance to the reference exceeds these
 
 FULL = dict(T=10.0, ours=((21, 2.0), (31, 2.0), (61, 2.0), (31, 1.0)), peers=(50, 100, 200))
-QUICK = dict(T=2.0, ours=((21, 2.0), (31, 2.0)), peers=(50, 100))
+QUICK = dict(T=0.2, ours=((11, 2.0), (11, 1.0)), peers=(50,), tip_times=(0.1, 0.2), windows=(0.1, 0.2),
+             drift_windows=(0.2,))
 
 
 # ----------------------------------------------------------------------------- ours
@@ -104,10 +102,10 @@ def run_ours(n_ctrl: int, c_dt: float, T: float) -> dict:
 
 
 # ----------------------------------------------------------------------------- PyElastica
-def run_peer(P, find_dt_max, case, n: int, T: float) -> dict:
+def run_peer(P, case, n: int, T: float) -> dict:
     """PyElastica at ``dt_max / 2`` (``dt_max`` searched over ``min(T, 1)`` s)."""
     T_probe = min(T, 1.0)
-    dt_max, dt_bad, _ = find_dt_max(P, case, n, T_probe, EVERY)
+    dt_max, dt_bad, _ = peer_dt_max(P, case, n, T_probe, EVERY)
     dt = fit_step(dt_max / 2, EVERY)
     notes = []
     for _ in range(4):
@@ -261,23 +259,36 @@ def plot(runs, mets, ref, path):
 
 
 # ----------------------------------------------------------------------------- main
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="T = 2 s, ours n_ctrl 21/31, PyElastica 50/100, no plot")
-    ap.add_argument("--save", default=None, metavar="FILE.npz", help="also save the recorded histories")
-    args = ap.parse_args(argv)
-    cfg = QUICK if args.quick else FULL
-    T = cfg["T"]
-
+def peer_runs(cfg, T) -> list[dict]:
+    """PyElastica's runs, or none (with a note) without PyElastica."""
+    if not peer_available():
+        print(PEER_ABSENT, flush=True)
+        return []
     from liegroup_int.bench import pyelastica_peer as P
-    from pyelastica_compare import find_dt_max
 
     print(f"PyElastica {P.VERSION}; numpy {np.__version__}", flush=True)
     w0 = time.perf_counter()
     P.warm_up()
     print(f"PyElastica numba warm-up: {time.perf_counter() - w0:.1f} s wall", flush=True)
+    runs, case = [], P.pendulum_case()
+    for n in cfg["peers"]:
+        r = run_peer(P, case, n, T)
+        runs.append(r)
+        print(f"  {r['label']}: dt={r['dt']:.3e}, {r['steps']} steps, CPU {r['cpu_s']:.2f} s, "
+              f"tip(T)={np.round(r['tip'][-1], 6)}" + (f"  FAILED: {r['failed']}" if r["failed"] else ""),
+              flush=True)
+    return runs
 
+
+def main(argv=None):
+    ap = parser(__doc__, quick_help="T = 0.2 s, ours n_ctrl 11 at two steps, PyElastica 50 elements")
+    ap.add_argument("--save", default=None, metavar="FILE.npz", help="also save the recorded histories")
+    args = ap.parse_args(argv)
+    cfg = QUICK if args.quick else FULL
+    T = cfg["T"]
+    global TIP_TIMES, WINDOWS, DRIFT_WINDOWS
+    TIP_TIMES, WINDOWS = cfg.get("tip_times", TIP_TIMES), cfg.get("windows", WINDOWS)
+    DRIFT_WINDOWS = cfg.get("drift_windows", DRIFT_WINDOWS)
     runs = []
     for n_ctrl, c_dt in cfg["ours"]:
         r = run_ours(n_ctrl, c_dt, T)
@@ -285,14 +296,7 @@ def main(argv=None):
         print(f"  {r['label']}: lam={r['lam']:.4e}, dt={r['dt']:.3e}, {r['steps']} steps, CPU {r['cpu_s']:.2f} s "
               f"(+{r['diag_s']:.2f} s energy diag), tip(T)={np.round(r['tip'][-1], 6)}"
               + (f"  FAILED: {r['failed']}" if r["failed"] else ""), flush=True)
-    case = P.pendulum_case()
-    for n in cfg["peers"]:
-        r = run_peer(P, find_dt_max, case, n, T)
-        runs.append(r)
-        print(f"  {r['label']}: dt={r['dt']:.3e}, {r['steps']} steps, CPU {r['cpu_s']:.2f} s, "
-              f"tip(T)={np.round(r['tip'][-1], 6)}" + (f"  FAILED: {r['failed']}" if r["failed"] else ""),
-              flush=True)
-
+    runs += peer_runs(cfg, T)
     ours_ok = [r for r in runs if r["kind"] == "ours" and not r["failed"]]
     ref = max(ours_ok, key=lambda r: (r["n"], -r["dt"]))
     mets = [metrics(r, ref, T) for r in runs]
@@ -301,9 +305,9 @@ def main(argv=None):
         np.savez(args.save, **{f"{r['short']}|{key}": r[key] for r in runs for key in ("t", "tip", "E", "KE")
                                if r[key] is not None})
         print(f"\nhistories: {args.save}")
-    if not args.quick:
-        plot(runs, mets, ref, IMG)
-        print(f"\nplot: {os.path.relpath(IMG, ROOT)}")
+    path = os.path.join(figure_dir(args, IMG), "galerkin_pendulum_10s.png")
+    plot(runs, mets, ref, path)
+    print(f"\nplot: {path}")
     return runs, mets
 
 

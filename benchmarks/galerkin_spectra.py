@@ -20,11 +20,12 @@ rolled-up half and full circle.
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 
+from liegroup_int.bench.table import parser
+from liegroup_int.groups.so3 import exp_so3
 from liegroup_int.integrators import eigenvalues, jacobian
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
@@ -56,8 +57,6 @@ def rolled(k: float, n: int):
     circular arc of curvature M / EI (no axial or shear strain), its positions projected on
     the basis, rotations and curvatures exact at the points. Returns (problem, state, t)
     with t after the couple's ramp."""
-    from liegroup_int.groups.so3 import exp_so3
-
     base = problem(load_scene("rollup", {"space.formulation": "galerkin", "space.n_ctrl": n}))
     EI, L = float(base.CM[0, 0]), base.space.length
     kap = k * math.pi / L
@@ -109,13 +108,12 @@ def loaded_arch(p: int = 4, n: int = 21) -> None:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="p = 4 and n_ctrl = 21 only")
+    ap = parser(__doc__, quick_help="cantilever at rest and the half circle, p = 4, n_ctrl = 11 only")
     ap.add_argument("--scenes", nargs="+", default=["cantilever", "pendulum", "arch"])
     args = ap.parse_args(argv)
     if args.quick:
-        at_rest(["cantilever"], [4], [21])
-        rollup([1.0], [21])
+        at_rest(["cantilever"], [4], [11])
+        rollup([1.0], [11])
         return
     at_rest(args.scenes, [2, 3, 4, 5, 6, 7, 8], [11, 21, 41, 61, 121])
     loaded_arch()

@@ -1,7 +1,7 @@
 """Work-precision on homogeneous spaces: RKMK4, the commutator-free CF4 and the
 Crouch-Grossman CG4a against scipy's DOP853 on the embedding.
 
-    python benchmarks/manifold_work_precision.py [--plot docs/img/manifold_work_precision.png]
+    python benchmarks/manifold_work_precision.py [--plot docs/img/manifold_work_precision.png] [--quick]
 
 Four problems, each against a tight reference at the final time T:
 
@@ -26,12 +26,12 @@ the same RKMK4 with the field written as a ``numba.njit`` function, which runs i
 compiled engine (SO(n) and SO(3) kernels; compiled once before timing). Peer:
 DOP853 over ``rtol = atol`` from 1e-4 to 1e-12. Reported: CPU time per run (best of 3), and
 the CPU ratio at equal error, interpolated log-log along each method's curve.
+``--quick``: the LLG spin only, two steps, three tolerances, one timed run each, no
+compiled field (compiling the engine for a user's ``f`` takes seconds in every process).
 """
 
 from __future__ import annotations
 
-import argparse
-import time
 from pathlib import Path
 
 import numpy as np
@@ -39,15 +39,16 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from liegroup_int import Isospectral, Sphere, integrate
+from liegroup_int.bench.table import figure_dir, markdown, parser
+from liegroup_int.bench.timing import best_of
+
+QUICK = dict(cases=["llg"], steps=2, tols=(1e-4, 1e-7, 1e-10), repeats=1, compiled=False)
+FULL = dict(steps=None, tols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12), repeats=3, compiled=True)
 
 
 def _cpu(fn, repeat=3):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.process_time()
-        out = fn()
-        best = min(best, time.process_time() - t0)
-    return out, best
+    t = best_of(fn, repeat)
+    return t.result, t.seconds
 
 
 @njit
@@ -168,21 +169,21 @@ def _ours(case, method, dt):
     return integrate(case["field"], case["y0"], (0.0, case["T"]), space=case["space"], method=method, dt=dt).y_final
 
 
-def run_case(case):
-    ref = _ours(case, "rkmk6", case["steps"][-1] / 8)
+def run_case(case, cfg):
+    steps = case["steps"][:cfg["steps"]]
+    ref = _ours(case, "rkmk6", steps[-1] / 8)
     rows = {}
-    methods = ("rkmk4", "cf4", "cg4a") + (("rkmk4 compiled",) if "field_njit" in case else ())
-    if "field_njit" in case:
-        _ours(case, "rkmk4 compiled", case["steps"][0])  # compile before timing
+    compiled = cfg["compiled"] and "field_njit" in case
+    methods = ("rkmk4", "cf4", "cg4a") + (("rkmk4 compiled",) if compiled else ())
     for method in methods:
         pts = []
-        for dt in case["steps"]:
-            y, cpu = _cpu(lambda: _ours(case, method, dt))
+        for dt in steps:
+            y, cpu = _cpu(lambda: _ours(case, method, dt), cfg["repeats"])
             pts.append((cpu, float(np.max(np.abs(y - ref))), case["invariant"](y), f"dt={dt:g}"))
         rows[method] = pts
     pts = []
-    for tol in (1e-4, 1e-6, 1e-8, 1e-10, 1e-12):
-        y, cpu = _cpu(lambda: case["peer"](tol))
+    for tol in cfg["tols"]:
+        y, cpu = _cpu(lambda: case["peer"](tol), cfg["repeats"])
         pts.append((cpu, float(np.max(np.abs(y - ref))), case["invariant"](y), f"tol={tol:g}"))
     rows["DOP853"] = pts
     return rows
@@ -198,44 +199,48 @@ def cpu_at(pts, err):
     return float(np.exp(np.interp(le, e, c))) if e[0] <= le <= e[-1] else float("nan")
 
 
+def report(case, rows) -> None:
+    print(f"\n### {case['name']}\n")
+    print(markdown(["method", "setting", "CPU [s]", "error", "invariant"],
+                   [[m, setting, f"{cpu:.4f}", f"{err:.2e}", f"{inv:.1e}"]
+                    for m, pts in rows.items() for cpu, err, inv, setting in pts]))
+    print("\nCPU ratio at equal error (ours / DOP853; - outside a curve):")
+    for err in (1e-6, 1e-8, 1e-10):
+        peer = cpu_at(rows["DOP853"], err)
+        ratios = [cpu_at(rows[m], err) / peer for m in rows if m != "DOP853"]
+        cells = ", ".join(f"{m} {r:.2g}" if np.isfinite(r) else f"{m} -" for m, r in zip(rows, ratios))
+        print(f"- error {err:g}: {cells}")
+
+
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--plot", type=Path, default=Path("docs/img/manifold_work_precision.png"))
+    ap = parser(__doc__)
+    ap.add_argument("--plot", type=Path, default=None, help="figure (default: OUT/manifold_work_precision.png)")
     ap.add_argument("--cases", nargs="+", default=["toda", "llg", "heavy_top", "pendulum"],
                     choices=("toda", "llg", "heavy_top", "pendulum"))
     args = ap.parse_args(argv)
+    cfg = {**FULL, "cases": args.cases} if not args.quick else QUICK
+    plot_path = args.plot or figure_dir(args, Path("docs/img")) / "manifold_work_precision.png"
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     make = {"toda": toda_case, "llg": llg_case, "heavy_top": heavy_top_case, "pendulum": pendulum_case}
-    cases = [make[c]() for c in args.cases]
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
-    axes = axes.ravel()
-    for ax, case in zip(axes, cases):
-        rows = run_case(case)
-        print(f"\n### {case['name']}\n")
-        print("| method | setting | CPU [s] | error | invariant |")
-        print("|---|---|---|---|---|")
+    for ax, case in zip(axes.ravel(), [make[c]() for c in cfg["cases"]]):
+        rows = run_case(case, cfg)
+        report(case, rows)
         for method, pts in rows.items():
-            for cpu, err, inv, setting in pts:
-                print(f"| {method} | {setting} | {cpu:.4f} | {err:.2e} | {inv:.1e} |")
             ax.loglog([p[1] for p in pts], [p[0] for p in pts], "o-", label=method)
-        print("\nCPU ratio at equal error (ours / DOP853):")
-        for err in (1e-6, 1e-8, 1e-10):
-            peer = cpu_at(rows["DOP853"], err)
-            cells = ", ".join(f"{m} {cpu_at(rows[m], err) / peer:.2g}" for m in rows if m != "DOP853")
-            print(f"- error {err:g}: {cells}")
         ax.set_xlabel("error at T")
         ax.set_ylabel("CPU [s]")
         ax.set_title(case["name"], fontsize=9)
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     fig.tight_layout()
-    args.plot.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.plot, dpi=110)
-    print(f"\nwrote {args.plot}")
+    plot_path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(plot_path, dpi=110)
+    print(f"\nwrote {plot_path}")
 
 
 if __name__ == "__main__":

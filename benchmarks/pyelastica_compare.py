@@ -34,33 +34,30 @@ diagnostic evaluated at the output times).
 Usage (from the repository root)::
 
     python benchmarks/pyelastica_compare.py            # full study (~8 min on 2 cores), writes docs/img/pyelastica_*.png
-    python benchmarks/pyelastica_compare.py --quick    # n_elements 25..100, shorter spans, ours n_ctrl 21/31 (no plots)
+    python benchmarks/pyelastica_compare.py --quick    # n_elements 25..100, shorter spans, ours n_ctrl 21/31 (plots in a temp dir)
     python benchmarks/pyelastica_compare.py --cache DIR  # keep/reuse our runs in DIR
+
+Without PyElastica (the ``[peers]`` extra) only our runs are made and tabulated, with a
+note that the peer columns are absent.
 """
 
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import os
-import sys
 import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-HERE = os.path.dirname(os.path.abspath(__file__))
-for p in (ROOT, HERE):
-    if p not in sys.path:
-        sys.path.insert(0, p)
+from liegroup_int.bench.table import PEER_ABSENT, figure_dir, markdown, parser, peer_available
+from liegroup_int.bench.work_precision import fit_step, peer_dt_max
+from liegroup_int.integrators import integrate_fixed, jacobian, resolve_method
+from liegroup_int.scenes import load_scene
+from liegroup_int.scenes.beam import problem as scene_problem
+from liegroup_int.studies import fit_rate
 
-from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
-from liegroup_int.problems.beam import BeamProblem  # noqa: E402
-from liegroup_int.scenes import load_scene  # noqa: E402
-from liegroup_int.scenes.beam import problem as scene_problem  # noqa: E402
-from liegroup_int.bench.work_precision import fit_step  # noqa: E402
-from liegroup_int.studies import fit_rate  # noqa: E402
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 IMG = os.path.join(ROOT, "docs", "img")
 
@@ -81,17 +78,13 @@ DT_FACTORS = (2.0, 1.5, 1.2, 1.0, 0.8, 0.6, 0.5, 0.4)
 
 # ----------------------------------------------------------------------------- ours
 def _make_problem(name: str, n_ctrl: int, backend: str, overrides: dict | None = None):
-    """The built-in scene at ``n_ctrl`` (plus scene ``overrides``)."""
-    pb = scene_problem(load_scene(name, {"space.n_ctrl": n_ctrl, **(overrides or {})}))
-    if backend == "numpy":
-        return pb
-    return BeamProblem(pb.space, pb.constants, pb.bcs, pb.loads, pb.initial, backend=backend)
+    """The built-in scene at ``n_ctrl`` with ``backend`` (plus scene ``overrides``)."""
+    return scene_problem(load_scene(name, {"space.n_ctrl": n_ctrl, "integrator.backend": backend,
+                                           **(overrides or {})}))
 
 
 def pick_backend(name: str) -> str:
-    """``numba`` if BeamProblem accepts it and reproduces the NumPy path on a few steps."""
-    if "backend" not in inspect.signature(BeamProblem.__init__).parameters:
-        return "numpy"
+    """``numba`` if it reproduces the NumPy path on a few steps, else ``numpy``."""
     try:
         tips = []
         for be in ("numpy", "numba"):
@@ -150,22 +143,6 @@ def run_ours(name: str, n_ctrl: int, dt: float, T: float, every: float, backend:
 
 
 # ----------------------------------------------------------------------------- peer
-def find_dt_max(P, case, n: int, T: float, every: float):
-    """Largest stable step from DT_FACTORS * dt_est (stable = finite and |tip| < 2 L).
-    Returns ``(dt_max, dt_unstable, run_at_dt_max)`` (``dt_unstable``: the next larger
-    step tried, which failed; nan if the first one worked)."""
-    w_sr = np.sqrt(case.G * case.A / (case.rho * min(case.I1, case.I2)))
-    est = min(case.length / n / case.wave_speed, 2.0 / w_sr)
-    bad = float("nan")
-    for f in DT_FACTORS:
-        dt = fit_step(f * est, every)
-        r = P.run(case, n, dt, T, every)
-        if r.finite and np.all(np.abs(r.tip) < 2 * case.length):
-            return dt, bad, r
-        bad = dt
-    raise RuntimeError(f"{case.name} n={n}: no stable step found")
-
-
 def diff_metrics(ref: dict, r) -> dict:
     """Tip differences of a run ``r`` (PyElastica result or our run dict) to our run ``ref``."""
     rt, rtip = (r["t"], r["tip"]) if isinstance(r, dict) else (r.t, r.tip)
@@ -277,6 +254,20 @@ def plot_histories(name, res, path):
     plt.close(fig)
 
 
+def plot_ours(results, path):
+    """Tip x3 of our runs alone (no peer), one panel per scene."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(results), figsize=(6.5 * len(results), 4.2), squeeze=False)
+    for ax, (name, res) in zip(axes[0], results.items()):
+        for n, o in res["ours"].items():
+            ax.plot(o["t"], o["tip"][:, 2], lw=1.0, label=f"ours n_ctrl={n}")
+        ax.set_xlabel("t [s]"), ax.set_ylabel("tip x3 [m]"), ax.grid(alpha=0.3), ax.legend(fontsize=8)
+        ax.set_title(f"{name} (PyElastica not installed)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def plot_convergence(results, path):
     plt = _plt()
     fig, axes = plt.subplots(1, len(results), figsize=(6.5 * len(results), 5.2), squeeze=False)
@@ -322,10 +313,9 @@ def plot_convergence(results, path):
 
 
 # ----------------------------------------------------------------------------- main study
-def study(name, P, cfg, n_list, backend, cache, time_check=True):
+def ours_ladder(name, cfg, backend, cache):
+    """Our runs of the ladder: ``({n_ctrl: run}, ref_n, fine_n, {n_ctrl: table row})``."""
     T, every = cfg["T"], cfg["every"]
-    case = P.CASES[name]()
-    print(f"\n=== {name}: T = {T:g} s, output every {every:g} s ===", flush=True)
     ours = {}
     for n_ctrl, dt in cfg["ladder"]:
         o = run_ours(name, n_ctrl, dt, T, every, backend, cache)
@@ -340,9 +330,20 @@ def study(name, P, cfg, n_list, backend, cache, time_check=True):
     ladder = {n: dict(dt=o["dt"], steps=int(o["steps"]), cpu_s=float(o["cpu_s"]), backend=str(o["backend"]),
                       **diff_metrics(ref, o), max_dz_fine=diff_metrics(fine, o)["max_dz"],
                       final_dz_fine=diff_metrics(fine, o)["final_dz"]) for n, o in ours.items()}
+    return ours, ref_n, fine_n, ladder
+
+
+def study(name, P, cfg, n_list, backend, cache, time_check=True):
+    T, every = cfg["T"], cfg["every"]
+    print(f"\n=== {name}: T = {T:g} s, output every {every:g} s ===", flush=True)
+    ours, ref_n, fine_n, ladder = ours_ladder(name, cfg, backend, cache)
+    if P is None:
+        return dict(ours=ours, ladder=ladder, ref_n=ref_n, fine_n=fine_n, T=T, peer=False)
+    case = P.CASES[name]()
+    ref, fine = ours[ref_n], ours[fine_n]
     rows, rows_l, peers, peers_l, zs, zl = [], [], [], [], {}, {}
     for n in n_list:
-        dt_max, dt_bad, _ = find_dt_max(P, case, n, T, every)
+        dt_max, dt_bad, _ = peer_dt_max(P, case, n, T, every)
         dt = fit_step(dt_max / 2, every)
         r = P.run(case, n, dt, T, every)
         if not r.finite:
@@ -374,7 +375,7 @@ def study(name, P, cfg, n_list, backend, cache, time_check=True):
     self_conv_l = [(n, float(np.max(np.abs(zl[n] - zl[2 * n])))) for n in n_list if 2 * n in zl]
     out = dict(rows=rows, rows_linear=rows_l, ours=ours, ladder=ladder, peers=peers, peers_linear=peers_l,
                self_conv=self_conv, self_conv_linear=self_conv_l, ref_n=ref_n, fine_n=fine_n,
-               constants=peers[0].constants, T=T)
+               constants=peers[0].constants, T=T, peer=True)
     for tag, z in (("", zs), ("_lin", zl)):
         z_ext, p = richardson(z, n_list)
         out[f"p_obs{tag}"] = p
@@ -423,8 +424,6 @@ def checks(name, res):
 def max_real_eigenvalue(pb) -> tuple[float, float, float]:
     """Largest real part of the eigenvalues of our linearized operator at the initial
     state (dense finite-difference Jacobian), its imaginary part and max |lambda|."""
-    from liegroup_int.integrators.spectrum import jacobian
-
     ev = np.linalg.eigvals(jacobian(pb, 0.0, pb.initial_state(), eps=1e-6))
     i = int(np.argmax(ev.real))
     return float(ev[i].real), float(abs(ev[i].imag)), float(np.abs(ev).max())
@@ -476,8 +475,21 @@ def robustness(P, backend, cache):
 
 
 # ----------------------------------------------------------------------------- output
+def print_ours(name, res):
+    """Our ladder alone (no peer)."""
+    print(f"\n## {name}  (T = {res['T']:g} s), ours only\n")
+    print(markdown(["run", "dt [s]", "steps", "CPU [s]", f"max_t abs(dz) vs ours n_ctrl={res['ref_n']} [m]",
+                    f"max_t abs(dz) vs ours n_ctrl={res['fine_n']} [m]", "tip_z(T) [m]"],
+                   [[f"ours RKMK4 p=4 n_ctrl={n}" + (" (reference)" if n == res["ref_n"] else "") + f" [{d['backend']}]",
+                     f"{d['dt']:.1e}", d["steps"], f"{d['cpu_s']:.2f}", f"{d['max_dz']:.2e}", f"{d['max_dz_fine']:.2e}",
+                     f"{d['final_z']:.6f}"] for n, d in res["ladder"].items()]))
+
+
 def print_tables(results):
     for name, res in results.items():
+        if not res["peer"]:
+            print_ours(name, res)
+            continue
         print(f"\n## {name}  (T = {res['T']:g} s)")
         print("PyElastica section constants: " + ", ".join(
             f"{k}={v:.6g}" if not isinstance(v, list) else f"{k}=({', '.join(f'{x:.4g}' for x in v)})"
@@ -536,9 +548,7 @@ def print_robustness(rob):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="n_elements 25..100, shorter spans, ours n_ctrl 21/31; no plots, no robustness part")
+    ap = parser(__doc__, quick_help="n_elements 25..100, shorter spans, ours n_ctrl 21/31; no robustness part; plots in --out")
     ap.add_argument("--cases", nargs="+", default=["pendulum", "cantilever"], choices=list(SETTINGS))
     ap.add_argument("--cache", default=None, help="directory to keep/reuse our runs (npz)")
     ap.add_argument("--backend", default="auto", choices=("auto", "numpy", "numba"),
@@ -551,13 +561,16 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.robustness is None:
         args.robustness = not args.quick
+    P = None
+    if peer_available():
+        from liegroup_int.bench import pyelastica_peer as P
 
-    from liegroup_int.bench import pyelastica_peer as P
-
-    print(f"PyElastica {P.VERSION}; numpy {np.__version__}")
-    c0 = time.perf_counter()
-    P.warm_up()
-    print(f"PyElastica numba warm-up: {time.perf_counter() - c0:.1f} s wall")
+        print(f"PyElastica {P.VERSION}; numpy {np.__version__}")
+        c0 = time.perf_counter()
+        P.warm_up()
+        print(f"PyElastica numba warm-up: {time.perf_counter() - c0:.1f} s wall")
+    else:
+        print(PEER_ABSENT)
     cfgs = QUICK if args.quick else SETTINGS
     n_list = N_ELEMENTS_QUICK if args.quick else N_ELEMENTS
     results = {}
@@ -566,7 +579,7 @@ def main(argv=None):
         print(f"ours: backend {backend}")
         results[name] = study(name, P, cfgs[name], n_list, backend, args.cache, not args.no_time_check)
     rob = None
-    if args.robustness:
+    if args.robustness and P is not None:
         backend = pick_backend("pendulum") if args.backend == "auto" else args.backend
         rob = robustness(P, backend, args.cache)
 
@@ -575,16 +588,19 @@ def main(argv=None):
     if rob is not None:
         print_robustness(rob)
 
-    if not (args.no_plots or args.quick):  # --quick never overwrites the docs' images
-        os.makedirs(IMG, exist_ok=True)
-        for name, res in results.items():
-            plot_histories(name, res, os.path.join(IMG, f"pyelastica_{name}.png"))
-        plot_convergence(results, os.path.join(IMG, "pyelastica_convergence.png"))
-        print(f"\nplots: {IMG}/pyelastica_*.png")
+    if not args.no_plots:
+        img = figure_dir(args, IMG)
+        if P is None:
+            plot_ours(results, os.path.join(img, "pyelastica_ours_only.png"))
+        else:
+            for name, res in results.items():
+                plot_histories(name, res, os.path.join(img, f"pyelastica_{name}.png"))
+            plot_convergence(results, os.path.join(img, "pyelastica_convergence.png"))
+        print(f"\nplots: {img}/pyelastica_*.png")
     if args.json:
         keep = ("rows", "rows_linear", "ladder", "self_conv", "self_conv_linear", "ref_n", "fine_n", "constants",
                 "T", "p_obs", "p_obs_lin", "ext_vs_ref", "ext_vs_fine", "ext_lin_vs_ref", "ext_lin_vs_fine")
-        js = {name: {k: res[k] for k in keep} for name, res in results.items()}
+        js = {name: {k: res[k] for k in keep if k in res} for name, res in results.items()}
         if rob is not None:
             js["robustness"] = rob
         with open(args.json, "w") as fh:

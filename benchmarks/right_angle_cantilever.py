@@ -17,10 +17,14 @@ either way); the digitized points themselves are not copied here.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
+
+from liegroup_int.bench.table import figure_dir, markdown, parser
+from liegroup_int.io import read_history
+from liegroup_int.runner import run_scene
+from liegroup_int.scenes import load_scene
 
 #: (curve, sign, window [s], published (value, time [s]))
 EXTREMA = [
@@ -33,10 +37,6 @@ EXTREMA = [
 
 
 def histories(out: Path, n_ctrl: int, t_end: float, overrides: dict | None = None):
-    from liegroup_int.io import read_history
-    from liegroup_int.runner import run_scene
-    from liegroup_int.scenes import load_scene
-
     if not (out / "history.csv").exists():
         run_scene(load_scene("right_angle_cantilever", {"space.n_ctrl": n_ctrl, "t_end": t_end,
                                                          "output.plots": False, "output.paraview": False,
@@ -54,28 +54,28 @@ def extremum(t, y, window, sign):
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__doc__, quick_help="n_ctrl = 11 over 0.5 s, runs and figure in --out")
     ap.add_argument("--runs", type=Path, default=Path("runs/right_angle_cantilever"))
     ap.add_argument("--n-ctrl", type=int, nargs="+", default=[11])
     ap.add_argument("--t-end", type=float, default=30.0)
-    ap.add_argument("--plot", type=Path, default=Path("docs/img/right_angle_cantilever.png"))
+    ap.add_argument("--plot", type=Path, default=None, help="figure (default: OUT/right_angle_cantilever.png)")
     ap.add_argument("--formulation", choices=("primal", "mixed", "galerkin"), default=None,
                     help="space.formulation (default: the scene's, mixed)")
     ap.add_argument("--kelvin-voigt", type=float, default=None,
                     help="material.kelvin_voigt [s] (default: the scene's, 3e-4)")
     args = ap.parse_args(argv)
+    out = figure_dir(args, Path("docs/img"))
+    if args.quick:
+        args.n_ctrl, args.t_end, args.runs = [11], 0.5, out / "runs"
+    args.plot = args.plot or out / "right_angle_cantilever.png"
     over = {**({"space.formulation": args.formulation} if args.formulation else {}),
             **({"material.kelvin_voigt": args.kelvin_voigt} if args.kelvin_voigt is not None else {})}
     tag = "".join(f"_{v}" for v in over.values())
     runs = {n: histories(args.runs / f"n{n}{tag}", n, args.t_end, over) for n in args.n_ctrl}
-    head = "| extremum | published (t) | " + " | ".join(f"n_ctrl = {n} per leg (t)" for n in args.n_ctrl) + " |"
-    print(head)
-    print("|" + "---|" * (2 + len(args.n_ctrl)))
-    for curve, sign, window, (value, time) in EXTREMA:
-        if window[0] > args.t_end:
-            continue
-        cells = [f"{v:+.3f} ({tt:.2f} s)" for v, tt in (extremum(t, y[curve], window, sign) for t, y in runs.values())]
-        print(f"| {curve} {'max' if sign > 0 else 'min'} | {value:+.2f} ({time:.2f} s) | " + " | ".join(cells) + " |")
+    rows = [[f"{curve} {'max' if sign > 0 else 'min'}", f"{value:+.2f} ({time:.2f} s)",
+             *[f"{v:+.3f} ({tt:.2f} s)" for v, tt in (extremum(t, y[curve], window, sign) for t, y in runs.values())]]
+            for curve, sign, window, (value, time) in EXTREMA if window[0] <= args.t_end]
+    print(markdown(["extremum", "published (t)", *[f"n_ctrl = {n} per leg (t)" for n in args.n_ctrl]], rows))
 
     import matplotlib
 

@@ -3,7 +3,7 @@
 Two problems on SO(3) x R^3, state ``(R, W)`` (body angular velocity ``W``):
 
 1. **Free body near its intermediate axis** (the README's "Python in ten lines" example,
-   ``benchmarks/free_body_case.py``): ``I = (1, 2, 3)``, ``R0 = I``, ``W0 = (0.01, 5, 0.01)``,
+   ``liegroup_int/bench/free_body.py``): ``I = (1, 2, 3)``, ``R0 = I``, ``W0 = (0.01, 5, 0.01)``,
    ``t in [0, 20]`` s. The user's vector field, in three forms: a ``numba.njit`` ``f`` (the
    compiled engine runs the whole fixed-step or adaptive loop), the README's plain-Python
    NumPy ``f`` (generic Python loop), and for the peer a unit-quaternion RHS (plain floats, or
@@ -50,46 +50,38 @@ runner is called once before it is timed (numba compilation excluded).
 Usage (from the repository root)::
 
     python benchmarks/rigid_body_work_precision.py          # full sweep, writes docs + PNG
-    python benchmarks/rigid_body_work_precision.py --quick  # smoke test, prints only
+    python benchmarks/rigid_body_work_precision.py --quick  # smoke test, prints only (figure in --out)
 """
 
 from __future__ import annotations
 
-import argparse
 import datetime as _dt
-import json
 import math
 import os
 import platform
-import subprocess
-import sys
 import time
+from pathlib import Path
 
+import numba
 import numpy as np
+import scipy
+from scipy.integrate import solve_ivp
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-for _p in (ROOT, HERE):
-    if _p not in sys.path:
-        sys.path.insert(0, _p)
-
-import free_body_case as FB  # noqa: E402
-import numba  # noqa: E402
-import scipy  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
-
-import liegroup_int  # noqa: E402
-from liegroup_int import SO3, IntegrationError, integrate, resolve_method  # noqa: E402
-from liegroup_int.groups.so3 import rotation_to_quaternion  # noqa: E402
-from liegroup_int.integrators import GroupProblem  # noqa: E402
-from liegroup_int.problems import RigidBody  # noqa: E402
+import liegroup_int
+from liegroup_int import SO3, IntegrationError, integrate, resolve_method
+from liegroup_int.bench import free_body as FB
+from liegroup_int.bench.table import figure_dir, parser
+from liegroup_int.bench.timing import best_of
+from liegroup_int.groups.so3 import rotation_to_quaternion
+from liegroup_int.integrators import GroupProblem
+from liegroup_int.problems import RigidBody
 
 SECTION = "rigid_body_work_precision"
 START, END = f"<!-- {SECTION}:start -->", f"<!-- {SECTION}:end -->"
-DOC = os.path.join(ROOT, "docs", "benchmarks.md")
-PNG = os.path.join(ROOT, "docs", "img", "rigid_body_work_precision.png")
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "benchmarks.md"
+PNG_NAME = "rigid_body_work_precision.png"
 COMMAND = "python benchmarks/rigid_body_work_precision.py"
-HELPER = os.path.join(HERE, "free_body_case.py")
 
 # -- heavy top ----------------------------------------------------------------------------
 INERTIA = (1.0, 0.8, 0.5)
@@ -147,49 +139,20 @@ FULL = {
 }
 QUICK = {
     "ref_steps": 1000,
-    "fixed": {"rkmk2": [400, 1600], "rkmk4": [100, 400], "rkmk6": [100, 250]},
-    "adaptive": {"rkmk45": [1e-5, 1e-8, 1e-11], "rkmk65": [1e-4, 1e-7, 1e-10, 1e-12]},
-    "scipy": {"RK45": [1e-5, 1e-8], "DOP853": [1e-5, 1e-8, 1e-11, 1e-13], "DOP853-numpy": [1e-6, 1e-10]},
-    "fb": {
-        "ref_steps": 4000,
-        "njit_fixed": {"rkmk4": [1000, 4000], "rkmk6": [400, 1000, 2500]},
-        "njit_adaptive": {"rkmk45": [1e-6, 1e-8, 1e-10], "rkmk65": [1e-6, 1e-8, 1e-10]},
-        "python_adaptive": {"rkmk45": [1e-9], "rkmk65": [1e-7, 1e-9, 1e-10]},
-        "scipy": {"DOP853": [1e-6, 1e-8, 1e-9, 1e-10, 1e-12], "DOP853-numpy": [1e-8, 1e-9, 1e-10]},
-        "first_calls": ("rkmk45",),
-    },
-    "min_time": 0.02,
-    "repeats": 2,
+    "fixed": {"rkmk4": [100, 400], "rkmk6": [100, 250]},
+    "adaptive": {"rkmk45": [1e-5, 1e-8], "rkmk65": [1e-4, 1e-7, 1e-10]},
+    "scipy": {"RK45": [1e-5, 1e-8], "DOP853": [1e-5, 1e-8, 1e-11], "DOP853-numpy": [1e-8]},
+    "min_time": 0.0,
+    "repeats": 1,
 }
 
 
 # -- helpers ------------------------------------------------------------------------------
 def timed(fn, min_time: float, repeats: int):
-    """``(result, best CPU seconds per call)``; short calls are batched to ``min_time``."""
-    t0 = time.process_time()
-    out = fn()
-    first = time.process_time() - t0
-    if first >= min_time:
-        times = [first]
-        for _ in range(repeats - 1):
-            t0 = time.process_time()
-            fn()
-            times.append(time.process_time() - t0)
-        return out, min(times)
-    n = max(1, math.ceil(min_time / max(first, 1e-7)))
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        for _ in range(n):
-            fn()
-        times.append((time.process_time() - t0) / n)
-    return out, min(times)
-
-
-def timed_warm(fn, cfg):
-    """:func:`timed` after one untimed call (compilation, caches)."""
-    fn()
-    return timed(fn, cfg["min_time"], cfg["repeats"])
+    """``(result, best CPU seconds per call)`` after one untimed call (compilation,
+    caches); short calls are batched to ``min_time``."""
+    t = best_of(fn, repeats, min_time)
+    return t.result, t.seconds
 
 
 def state_error(R, W, R_ref, W_ref) -> float:
@@ -269,7 +232,7 @@ def run_ours(method, *, dt=None, tol=None, ref=None, cfg=None):
         fn = lambda: integrate(problem, Y0, (0.0, T_END), method=method, dt=dt)  # noqa: E731
     else:
         fn = lambda: integrate(problem, Y0, (0.0, T_END), method=method, rtol=tol, atol=tol)  # noqa: E731
-    sol, cpu = timed_warm(fn, cfg)
+    sol, cpu = timed(fn, cfg["min_time"], cfg["repeats"])
     R, W = TOP.split(sol.y_final)
     dE, dLz = diagnostics(R, W)
     return {
@@ -341,7 +304,7 @@ def fb_run_ours(variant, method, *, dt=None, tol=None, ref, cfg, t_eval=None):
     target = NoReuse(FB.SPACE, FB.f_python) if variant == "python, no reuse" else f
     kw = {"dt": dt} if dt is not None else {"rtol": tol, "atol": tol}
     fn = lambda: integrate(target, FB.Y0, (0.0, FB.T_END), space=FB.SPACE, method=method, t_eval=t_eval, **kw)  # noqa: E731
-    sol, cpu = timed_warm(fn, cfg)
+    sol, cpu = timed(fn, cfg["min_time"], cfg["repeats"])
     outputs = 1 if t_eval is None else len(sol.t) - 1
     return fb_row(variant, method, ("h", dt) if dt is not None else ("tol", tol), sol, cpu, ref, outputs)
 
@@ -381,13 +344,8 @@ def fb_reference(n_steps: int):
 
 def first_call_times(methods):
     """``{method: {"first", "second"}}`` CPU seconds of integrate with the njit f, each in a
-    fresh process (``free_body_case.py --first-call``)."""
-    out = {}
-    for m in methods:
-        res = subprocess.run([sys.executable, HELPER, "--first-call", m], capture_output=True, text=True, cwd=ROOT,
-                             check=True)
-        out[m] = json.loads(res.stdout.strip().splitlines()[-1])
-    return out
+    fresh process (:func:`liegroup_int.bench.free_body.first_calls_fresh`)."""
+    return {m: FB.first_calls_fresh(m) for m in methods}
 
 
 def generic_overhead(cfg, run45):
@@ -400,17 +358,17 @@ def generic_overhead(cfg, run45):
                             ("fixed rkmk4", "rkmk4", {"dt": FB.T_END / 2000})):
         fn = lambda method=method, kw=kw: integrate(const, FB.Y0, (0.0, FB.T_END), space=FB.SPACE, method=method,  # noqa: E731
                                                     **kw)
-        sol, cpu = timed_warm(fn, cfg)
+        sol, cpu = timed(fn, cfg["min_time"], cfg["repeats"])
         res[key] = (cpu / sol.stats.rhs_evals * 1e6, sol.stats.rhs_evals)
     batch = lambda: [FB.f_python(0.0, FB.Y0) for _ in range(500)]  # noqa: E731
-    _, t = timed_warm(batch, cfg)
+    _, t = timed(batch, cfg["min_time"], cfg["repeats"])
     res["f_python"] = t / 500 * 1e6
     sc = FB.quat0()
     batch = lambda: [FB.quat_rhs_numpy(0.0, sc) for _ in range(500)]  # noqa: E731
-    _, t = timed_warm(batch, cfg)
+    _, t = timed(batch, cfg["min_time"], cfg["repeats"])
     res["rhs_numpy"] = t / 500 * 1e6
     batch = lambda: [FB.quat_rhs_float(0.0, sc) for _ in range(500)]  # noqa: E731
-    _, t = timed_warm(batch, cfg)
+    _, t = timed(batch, cfg["min_time"], cfg["repeats"])
     res["rhs_float"] = t / 500 * 1e6
     if run45 is not None:
         res["subtracted rkmk45"] = run45["cpu"] / run45["nfev"] * 1e6 - res["f_python"]
@@ -669,12 +627,6 @@ def fb_fmt_row(r):
             f"{r['cpu']:.3g}", f"{r['err']:.2e}", f"{r['dE']:.1e}", f"{r['geom']:.1e}"]
 
 
-def text_table(header, rows):
-    widths = [max(len(h), *(len(x[i]) for x in rows)) for i, h in enumerate(header)]
-    line = lambda cells: "  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(cells, widths)))  # noqa: E731
-    return "\n".join([line(header), line(["-" * w for w in widths])] + [line(x) for x in rows])
-
-
 def md_table(header, rows):
     esc = lambda cells: [c.replace("|", "\\|") for c in cells]  # noqa: E731 - pipes inside cells
     out = ["| " + " | ".join(esc(header)) + " |", "|" + "|".join("---" for _ in header) + "|"]
@@ -779,7 +731,7 @@ def plateau(rs):
     return (min(r["err"] for r in rs), gain) if gain < 4 else None
 
 
-def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
+def _reading_free_body(fb_rows, t1, t2, over, fpe) -> list[str]:
     parts = []
     ok1 = [x for x in t1 if x["ratio"] is not None]
     if ok1:
@@ -811,6 +763,11 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
             f"equations as plain floats cost {over['rhs_float']:.1f} us, which is why the njit f, not the "
             f"generic loop, is the way to beat solve_ivp with a good RHS. "
         )
+    return parts
+
+
+def _reading_heavy_top_fsal(t3, t4, pe) -> list[str]:
+    parts = []
     ok3 = [x for x in t3 if x["ratio"] is not None]
     if ok3:
         lo, hi = min(x["ratio"] for x in ok3), max(x["ratio"] for x in ok3)
@@ -836,6 +793,11 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
             f"and the controller continues from that short step, so {b['outputs']} outputs took {b['steps']} accepted steps "
             f"against {a['steps']} (the engine has no dense output). "
         )
+    return parts
+
+
+def _reading_plateaus(rows, fb_rows, defects) -> list[str]:
+    parts = []
     for name, rr, sel in (("heavy top", rows, lambda r: True), ("free body", fb_rows, lambda r: r.get("variant") == "njit")):
         for m in ("rkmk32", "rkmk45", "rkmk65"):
             pl = plateau([r for r in rr if r["method"] == m and sel(r)])
@@ -848,9 +810,13 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
                 f"a global error term that shrinks only like h.")
             parts.append(f"**{m} on the {name}** stops converging at about {pl[0]:.0e} (its two tightest tolerance "
                          f"decades gain {pl[1]:.1f}x in error).{why} ")
+    return parts
+
+
+def _reading_geometry(rows, fb_rows, ref_info) -> str:
     geom_o = max(r["geom"] for r in rows + fb_rows if r["lib"] == "liegroup_int")
     geom_s = max(r["geom"] for r in rows + fb_rows if r["lib"] == "scipy")
-    parts.append(
+    return (
         f"**Geometry.** R stays orthogonal to {geom_o:.0e} in every run of ours with no projection; the "
         f"quaternion state drifts off the unit sphere by up to {geom_s:.0e} (loosest tolerance; q is normalised "
         f"before the error is measured, which favours scipy). "
@@ -860,6 +826,12 @@ def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
         f"on a shared 2-core VM and move by roughly 10-20% between runs; the ratios far from their targets are "
         f"robust to that, those near 1 are not."
     )
+
+
+def reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects):
+    """The prose reading of the results (documentation section)."""
+    parts = (_reading_free_body(fb_rows, t1, t2, over, fpe) + _reading_heavy_top_fsal(t3, t4, pe)
+             + _reading_plateaus(rows, fb_rows, defects) + [_reading_geometry(rows, fb_rows, ref_info)])
     return "\n\n".join(parts)
 
 
@@ -912,17 +884,47 @@ def sweep_free_body(fcfg, cfg, ref):
     return fb_rows, skipped
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="small sweep for a smoke test; prints only (no docs, no PNG)")
-    ap.add_argument("--no-write", action="store_true", help="do not write docs/benchmarks.md or the PNG")
-    args = ap.parse_args(argv)
-    cfg = QUICK if args.quick else FULL
-    fcfg = cfg["fb"]
-    write = not (args.quick or args.no_write)
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+def heavy_top_sweep(cfg, skipped):
+    """Every heavy-top run of ``cfg`` (ours and scipy's) and the reference's step check."""
+    print(f"\nheavy top: I={INERTIA}, m={MASS}, chi={COM}, g={GRAVITY}, tilt={TILT} rad, "
+          f"W0={tuple(float(w) for w in W0)}, T={T_END}")
+    ref, ref_diff, ref_cpu = reference(cfg["ref_steps"])
+    h_ref = T_END / cfg["ref_steps"]
+    print(f"reference: rkmk6 h={h_ref:.3g} vs h/2={h_ref / 2:.3g}: difference {ref_diff:.2e} ({ref_cpu:.1f} CPU s)")
+    rows = []
+    for kind, sweep in (("fixed", cfg["fixed"]), ("adaptive", cfg["adaptive"])):
+        for m, vals in sweep.items():
+            for v in vals:
+                kw = {"dt": T_END / v} if kind == "fixed" else {"tol": v}
+                add_row(rows, skipped, lambda m=m, kw=kw: run_ours(m, ref=ref, cfg=cfg, **kw), f"heavy top {m} {kw}",
+                        fmt_row)
+    for m, tols in cfg["scipy"].items():
+        for tol in tols:
+            rows.append(run_scipy(m, tol, ref, cfg))
+            print("  ", " ".join(fmt_row(rows[-1])), flush=True)
+    return rows, ref_diff
 
-    # ---- free body (targets 1, 2, 4) ----
+
+def quick(args):
+    """The heavy top alone (built-in compiled plugin, kernels cached on disk): the free
+    body's ``numba.njit`` f compiles the engine anew in every process (~10 s per loop)."""
+    print("quick mode: heavy top only (the free body's njit f would compile the engine for ~20 s)")
+    rows, _ = heavy_top_sweep(QUICK, [])
+    h3, r3, _ = target3(rows)
+    sh, srows = summary(rows)
+    print("\nheavy-top runs:\n" + md_table(HEADER, [fmt_row(r) for r in rows]))
+    print("\nTarget 3 (heavy top, adaptive, compiled engine vs scipy best):\n" + md_table(h3, r3))
+    print("\nHeavy top, all methods:\n" + md_table(sh, srows))
+    if not args.no_write:
+        png = figure_dir(args, ROOT / "docs" / "img") / PNG_NAME
+        plot(rows, [], str(png))
+        print(f"wrote {png}")
+
+
+def free_body_part(cfg) -> dict:
+    """Every free-body run (targets 1, 2, 4): the compile probes, the reference, the sweep,
+    the FSAL runs and the generic loop's overhead."""
+    fcfg = cfg["fb"]
     print(f"free body (README): I={FB.INERTIA}, W0={FB.W0}, T={FB.T_END}")
     comp = first_call_times(fcfg["first_calls"])
     for m, v in comp.items():
@@ -946,25 +948,13 @@ def main(argv=None):
     print(f"njit vs Python f, rkmk45 tol {FB_TOL:.0e}: final states differ by {agree:.1e}, same steps: {same_steps}")
     over = generic_overhead(cfg, extra["python"][0])
 
-    # ---- heavy top (targets 3, 4) ----
-    print(f"\nheavy top: I={INERTIA}, m={MASS}, chi={COM}, g={GRAVITY}, tilt={TILT} rad, "
-          f"W0={tuple(float(w) for w in W0)}, T={T_END}")
-    ref, ref_diff, ref_cpu = reference(cfg["ref_steps"])
-    h_ref = T_END / cfg["ref_steps"]
-    print(f"reference: rkmk6 h={h_ref:.3g} vs h/2={h_ref / 2:.3g}: difference {ref_diff:.2e} ({ref_cpu:.1f} CPU s)")
-    rows = []
-    for kind, sweep in (("fixed", cfg["fixed"]), ("adaptive", cfg["adaptive"])):
-        for m, vals in sweep.items():
-            for v in vals:
-                kw = {"dt": T_END / v} if kind == "fixed" else {"tol": v}
-                add_row(rows, skipped, lambda m=m, kw=kw: run_ours(m, ref=ref, cfg=cfg, **kw), f"heavy top {m} {kw}",
-                        fmt_row)
-    for m, tols in cfg["scipy"].items():
-        for tol in tols:
-            rows.append(run_scipy(m, tol, ref, cfg))
-            print("  ", " ".join(fmt_row(rows[-1])), flush=True)
+    return dict(comp=comp, fb_ref=fb_ref, fb_half=fb_half, fb_dop=fb_dop, fb_rows=fb_rows, skipped=skipped,
+                extra=extra, agree=agree, same_steps=same_steps, over=over)
 
-    # ---- analysis ----
+
+def analyse(cfg, fb: dict, rows, ref_diff) -> dict:
+    """The targets' tables, the per-evaluation costs and the tableaux' defects."""
+    fb_rows, extra, over = fb["fb_rows"], fb["extra"], fb["over"]
     h1, r1, t1 = target1(fb_rows)
     h2, r2, t2 = target2(fb_rows, over)
     h3, r3, t3 = target3(rows)
@@ -972,40 +962,50 @@ def main(argv=None):
     h4, r4, t4 = target4(rows, fb_rows, extra)
     pe, fpe = per_eval_costs(rows), fb_per_eval_costs(fb_rows)
     defects = float_coefficient_defects(list(cfg["fixed"]) + list(cfg["adaptive"]))
-    ref_info = {"top": ref_diff, "fb_half": fb_half, "fb_dop": fb_dop}
-    heads = headline(t1, t2, t3, t4, comp)
+    ref_info = {"top": ref_diff, "fb_half": fb["fb_half"], "fb_dop": fb["fb_dop"]}
+    heads = headline(t1, t2, t3, t4, fb["comp"])
     hh = ["target", "goal", "measured", "verdict"]
     fb_table = [fb_fmt_row(r) for r in fb_rows]
     table_rows = [fmt_row(r) for r in rows]
 
-    print("\nfree body runs:\n" + text_table(FB_HEADER, fb_table))
-    print("\nheavy-top runs:\n" + text_table(HEADER, table_rows))
-    print("\nTarget 1 (free body, numba.njit f vs DOP853 plain-float RHS):\n" + text_table(h1, r1))
-    print("\nTarget 2 (free body, Python f vs DOP853 NumPy-style RHS):\n" + text_table(h2, r2))
+    text = reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects)
+    return dict(h1=h1, r1=r1, h2=h2, r2=r2, h3=h3, r3=r3, sh=sh, srows=srows, h4=h4, r4=r4, pe=pe, fpe=fpe,
+                defects=defects, heads=heads, hh=hh, fb_table=fb_table, table_rows=table_rows, text=text)
+
+
+def print_report(fb: dict, a: dict) -> None:
+    over, pe, fpe = fb["over"], a["pe"], a["fpe"]
+    print("\nfree body runs:\n" + md_table(FB_HEADER, a["fb_table"]))
+    print("\nheavy-top runs:\n" + md_table(HEADER, a["table_rows"]))
+    print("\nTarget 1 (free body, numba.njit f vs DOP853 plain-float RHS):\n" + md_table(a["h1"], a["r1"]))
+    print("\nTarget 2 (free body, Python f vs DOP853 NumPy-style RHS):\n" + md_table(a["h2"], a["r2"]))
     print(f"generic loop per stage without f: adaptive rkmk45 {over['adaptive rkmk45'][0]:.1f} us "
           f"({over['adaptive rkmk45'][1]} evals), fixed rkmk4 {over['fixed rkmk4'][0]:.1f} us; "
           f"README f alone {over['f_python']:.1f} us; by subtraction {over.get('subtracted rkmk45', float('nan')):.1f} us")
-    print("\nTarget 3 (heavy top, adaptive, compiled engine vs scipy best):\n" + text_table(h3, r3))
-    print("\nHeavy top, all methods:\n" + text_table(sh, srows))
-    print("\nTarget 4 (FSAL):\n" + text_table(h4, r4))
+    print("\nTarget 3 (heavy top, adaptive, compiled engine vs scipy best):\n" + md_table(a["h3"], a["r3"]))
+    print("\nHeavy top, all methods:\n" + md_table(a["sh"], a["srows"]))
+    print("\nTarget 4 (FSAL):\n" + md_table(a["h4"], a["r4"]))
     print(f"\nCPU per RHS evaluation (median, runs >= 500 evals): heavy top fixed {pe['fixed']:.2g} us, "
           f"adaptive {pe['adaptive']:.2g} us, scipy {pe['scipy']:.2g} / NumPy RHS {pe['scipy-numpy']:.2g} us; "
           f"free body njit {fpe['njit']:.2g} us, Python f {fpe['python']:.2g} us, scipy {fpe['scipy-float']:.2g} / "
           f"NumPy RHS {fpe['scipy-numpy']:.2g} us")
     print("\norder-condition defects of the float64-rounded tableaux (order 1, order 2; max|A|, max|b|):")
-    for m, (d1, d2, amax, bmax) in defects.items():
+    for m, (d1, d2, amax, bmax) in a["defects"].items():
         print(f"  {m:7s} {d1: .1e} {d2: .1e}   {amax:7.1f} {bmax:7.1f}")
-    print("\n" + text_table(hh, heads))
-    text = reading(rows, fb_rows, t1, t2, t3, t4, over, pe, fpe, ref_info, defects)
-    print("\n" + text)
-    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
-    print(f"\ntotal runtime: {wall:.1f} s wall, {cpu:.1f} s CPU (this process; compile probes run in subprocesses)")
+    print("\n" + md_table(a["hh"], a["heads"]))
+    print("\n" + a["text"])
 
-    if write:
-        plot(rows, fb_rows, PNG)
-        date = _dt.date.today().isoformat()
-        sk = "" if not skipped else "\nSkipped runs: " + "; ".join(f"`{x}`" for x in skipped) + "\n"
-        block = f"""## Rigid bodies: work-precision, liegroup_int vs scipy `solve_ivp`
+
+def _doc_names(cfg, fb: dict, a: dict, ref_diff: float, wall: float) -> dict:
+    """The names the documentation templates use."""
+    h_ref = T_END / cfg["ref_steps"]
+    return dict(cfg=cfg, fcfg=cfg["fb"], wall=wall, h_ref=h_ref, ref_diff=ref_diff, date=_dt.date.today().isoformat(),
+                sk="" if not fb["skipped"] else "\nSkipped runs: " + "; ".join(f"`{x}`" for x in fb["skipped"]) + "\n",
+                **{k: fb[k] for k in ("comp", "fb_half", "fb_dop", "over", "agree", "same_steps")}, **a)
+
+
+def doc_head(cfg, wall, hh, heads, date, **_) -> str:
+    return f"""## Rigid bodies: work-precision, liegroup_int vs scipy `solve_ivp`
 
 Generated on {date} by
 
@@ -1022,10 +1022,14 @@ apart). Error = `|R(T) - R_ref(T)|_F + |W(T) - W_ref(T)|` at the final time. Pee
 
 {md_table(hh, heads)}
 
-### Free body near the intermediate axis (the README's example; targets 1, 2)
+"""
+
+
+def doc_free_body(fcfg, comp, fb_half, fb_dop, over, agree, same_steps, h1, r1, h2, r2, fb_table, **_) -> str:
+    return f"""### Free body near the intermediate axis (the README's example; targets 1, 2)
 
 `I = {FB.INERTIA}`, `R0 = I`, `W0 = {FB.W0}`, `t in [0, {FB.T_END:g}]` s (the body flips about every 3 s);
-`benchmarks/free_body_case.py` holds the four forms of the right-hand side. Ours: `integrate(f, y0, (0, 20),
+`liegroup_int/bench/free_body.py` holds the four forms of the right-hand side. Ours: `integrate(f, y0, (0, 20),
 space=Product(SO3, Rn(3)), ...)` with a `numba.njit` f (the whole fixed-step or adaptive loop runs in the compiled
 engine) or the README's plain-Python NumPy f (generic Python loop); fixed-step rkmk4/rkmk6 and adaptive
 rkmk45/rkmk65 with `rtol = atol = tol`. Peer RHS: plain floats (`s.tolist()`, the fastest Python form) or
@@ -1060,7 +1064,11 @@ Generic-loop overhead per stage, excluding f (an f returning a precomputed array
 
 </details>
 
-### Heavy top (built-in `RigidBody(...).problem()`, compiled; target 3)
+"""
+
+
+def doc_heavy_top(h_ref, ref_diff, h3, r3, sh, srows, table_rows, sk, h4, r4, pe, fpe, text, **_) -> str:
+    return f"""### Heavy top (built-in `RigidBody(...).problem()`, compiled; target 3)
 
 Non-symmetric heavy top on SO(3) x R^3, body frame: `dR/dt = R hat(W)`,
 `I dW/dt = (I W) x W + m g (Gamma x chi)`, `Gamma = R^T e3`, with `I = {INERTIA}` kg m^2,
@@ -1106,8 +1114,30 @@ CPU per RHS evaluation (median over runs with >= 500 evaluations): heavy top, co
 
 {text}
 """
-        write_doc(block, DOC)
-        print(f"wrote {os.path.relpath(PNG, ROOT)} and the '{SECTION}' section of {os.path.relpath(DOC, ROOT)}")
+
+
+def main(argv=None):
+    ap = parser(__doc__, quick_help="small sweep for a smoke test; no docs (the figure goes to --out)")
+    ap.add_argument("--no-write", action="store_true", help="do not write docs/benchmarks.md or the PNG")
+    args = ap.parse_args(argv)
+    if args.quick:
+        return quick(args)
+    cfg = FULL
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    fb = free_body_part(cfg)
+    rows, ref_diff = heavy_top_sweep(cfg, fb["skipped"])
+    a = analyse(cfg, fb, rows, ref_diff)
+    print_report(fb, a)
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    print(f"\ntotal runtime: {wall:.1f} s wall, {cpu:.1f} s CPU (this process; compile probes run in subprocesses)")
+    if args.no_write:
+        return
+    png = figure_dir(args, ROOT / "docs" / "img") / PNG_NAME
+    plot(rows, fb["fb_rows"], str(png))
+    print(f"wrote {png}")
+    names = _doc_names(cfg, fb, a, ref_diff, wall)
+    write_doc(doc_head(**names) + doc_free_body(**names) + doc_heavy_top(**names), str(DOC))
+    print(f"wrote the '{SECTION}' section of {DOC.relative_to(ROOT)}")
 
 
 if __name__ == "__main__":

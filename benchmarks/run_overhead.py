@@ -1,6 +1,6 @@
 """Where a run's time goes: start-up, set-up, integration, outputs and plots.
 
-    python benchmarks/run_overhead.py [--no-cold]
+    python benchmarks/run_overhead.py [--no-cold] [--quick]
 
 Runs the CLI as a user does (``python -m liegroup_int ...`` in a subprocess, numba cache
 warm: one untimed run first) and reports, per case, the process CPU time of the child
@@ -10,6 +10,7 @@ warm: one untimed run first) and reports, per case, the process CPU time of the 
 
 Then (unless ``--no-cold``) the first run on an empty numba cache (``NUMBA_CACHE_DIR`` a
 new directory), without and after ``liegroup-int compile``, in wall-clock seconds.
+``--quick``: two short cases, no study, no cold runs.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from liegroup_int.bench.table import markdown, parser
 
 CASES = [
     ("liegroup-int scenes", ["scenes"], None),
@@ -37,6 +40,8 @@ CASES = [
                                          "--set", "integrator.dt=0.01"], "run"),
     ("heavy_top as shipped (10,000 steps), --no-plots", ["run", "heavy_top", "--quiet", "--no-plots"], "run"),
 ]
+
+QUICK_CASES = [CASES[0], CASES[6]]
 
 STUDY = ["converge", "heavy_top", "--param", "integrator.dt", "--values", "0.02", "0.01", "0.005", "0.0025", "--set",
          "t_end=1"]
@@ -80,32 +85,47 @@ def cold(tmp: Path) -> None:
     print(f"| then `run heavy_top` | {timed(['run', 'heavy_top', '--quiet', '--out', str(tmp / 'c3')], tmp / 'nc2'):.1f} |")
 
 
-def main() -> None:
+def case_rows(cases, tmp: Path) -> list[list]:
+    rows = []
+    for k, (label, args, kind) in enumerate(cases):
+        cpu, s = run(args, tmp / f"r{k}" if kind else None)
+        if s is None:
+            rows.append([label, f"{cpu:.2f}", "", "", "", "", "", ""])
+            continue
+        t = s["timing"]
+        per = 1e3 * t["output_s"] / max(1, s["history_rows"])
+        rows.append([label, f"{cpu:.2f}", f"{t['setup_s']:.2f}", f"{t['integrate_s']:.2f}", f"{t['output_s']:.3f}",
+                     f"{per:.2f}", f"{t['plots_s']:.2f}", f"{cpu / t['integrate_s']:.1f}x"])
+    return rows
+
+
+def study_rows(tmp: Path) -> list[list]:
+    rows = []
+    for label, extra in (("--serial", ["--serial"]), ("local Dask cluster, 2 workers", [])):
+        wall, t = study(extra, tmp / f"study{len(extra)}")
+        rows.append([label, f"{wall:.2f}", f"{t['integrate_s']:.2f}", f"{t['output_s']:.2f}", f"{t['plots_s']:.2f}",
+                     f"{t['setup_s']:.2f}", f"{t['outside_runs_s']:.2f}"])
+    return rows
+
+
+def main(argv=None) -> None:
+    ap = parser(__doc__)
+    ap.add_argument("--no-cold", action="store_true", help="skip the runs on an empty numba cache")
+    args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        run(["run", "cantilever", "--quiet", "--no-plots", "--set", "t_end=1e-4", "--set", "output.every=5e-5"],
-            tmp / "warm")  # numba cache
-        run(["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.01"], tmp / "warm2")
-        print("| case | process CPU s | setup s | integrate s | output s | output ms/row | plots s | "
-              "CPU / integrate |")
-        print("|---|---|---|---|---|---|---|---|")
-        for k, (label, args, kind) in enumerate(CASES):
-            cpu, s = run(args, tmp / f"r{k}" if kind else None)
-            if s is None:
-                print(f"| {label} | {cpu:.2f} | | | | | | |")
-                continue
-            t = s["timing"]
-            per = 1e3 * t["output_s"] / max(1, s["history_rows"])
-            print(f"| {label} | {cpu:.2f} | {t['setup_s']:.2f} | {t['integrate_s']:.2f} | {t['output_s']:.3f} | "
-                  f"{per:.2f} | {t['plots_s']:.2f} | {cpu / t['integrate_s']:.1f}x |")
-        print("\n| `converge heavy_top`, 4 runs of 1 s | wall s | integrate s | outputs s | plots s | set-up s | "
-              "outside the runs s |")
-        print("|---|---|---|---|---|---|---|")
-        for label, extra in (("--serial", ["--serial"]), ("local Dask cluster, 2 workers", [])):
-            wall, t = study(extra, tmp / f"study{len(extra)}")
-            print(f"| {label} | {wall:.2f} | {t['integrate_s']:.2f} | {t['output_s']:.2f} | {t['plots_s']:.2f} | "
-                  f"{t['setup_s']:.2f} | {t['outside_runs_s']:.2f} |")
-        if "--no-cold" not in sys.argv[1:]:
+        run(["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.01"], tmp / "warm2")  # numba cache
+        if not args.quick:
+            run(["run", "cantilever", "--quiet", "--no-plots", "--set", "t_end=1e-4", "--set", "output.every=5e-5"],
+                tmp / "warm")
+        print(markdown(["case", "process CPU s", "setup s", "integrate s", "output s", "output ms/row", "plots s",
+                        "CPU / integrate"], case_rows(QUICK_CASES if args.quick else CASES, tmp)))
+        if args.quick:
+            return
+        print()
+        print(markdown(["`converge heavy_top`, 4 runs of 1 s", "wall s", "integrate s", "outputs s", "plots s",
+                        "set-up s", "outside the runs s"], study_rows(tmp)))
+        if not args.no_cold:
             cold(tmp)
 
 

@@ -11,18 +11,19 @@ Prints one table per (scene, state, formulation, damping) with max Re(lambda) [1
 (``.`` for at most 1e-2 1/s, the growth threshold), and with ``--damping auto`` the
 Kelvin-Voigt time sized per discretization and its damping ratio on the first mode.
 Entries are cached in bench/stability_map.json (delete it to recompute); the tables go
-to docs/img/stability_map_*.png as heat maps.
+to docs/img/stability_map_*.png as heat maps. ``--quick``: the cantilever at rest, primal,
+p = 3, n_ctrl = 11, cache and heat map in a temporary directory (or ``--out``).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
 import numpy as np
 
 from liegroup_int.bench.stability import map_entry
+from liegroup_int.bench.table import figure_dir, parser
 
 ROOT = Path(__file__).resolve().parents[1]
 CACHE = ROOT / "bench" / "stability_map.json"
@@ -33,15 +34,15 @@ def _key(scene, state, formulation, damping, p, n):
     return f"{scene}|{state}|{formulation}|{damping}|{p}|{n}"
 
 
-def _load():
-    return json.loads(CACHE.read_text()) if CACHE.exists() else {}
+def _load(path: Path):
+    return json.loads(path.read_text()) if path.exists() else {}
 
 
-def _save(cache):
-    CACHE.parent.mkdir(parents=True, exist_ok=True)
-    tmp = CACHE.with_suffix(".tmp")
+def _save(cache, path: Path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(cache, indent=1))
-    tmp.replace(CACHE)
+    tmp.replace(path)
 
 
 def _cell(e: dict) -> str:
@@ -105,7 +106,7 @@ def heatmap(entries, degrees, ns, title, path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__doc__, quick_help="cantilever at rest, primal, p = 3, n_ctrl = 11")
     ap.add_argument("--scenes", nargs="+", default=["cantilever", "pendulum", "arch"])
     ap.add_argument("--states", nargs="+", default=["rest"])
     ap.add_argument("--formulations", nargs="+", default=["primal", "mixed"])
@@ -114,7 +115,12 @@ def main(argv=None):
     ap.add_argument("--n", nargs="+", type=int, default=[11, 21, 31, 41, 61, 81, 121])
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args(argv)
-    cache = _load()
+    img = figure_dir(args, IMG)
+    if args.quick:
+        args.scenes, args.states, args.formulations, args.damping = ["cantilever"], ["rest"], ["primal"], ["none"]
+        args.degrees, args.n = [3], [11]
+    cache_path = img / "stability_map.json" if args.quick or args.out is not None else CACHE
+    cache = _load(cache_path)
     for scene in args.scenes:
         for state in args.states:
             for form in args.formulations:
@@ -127,7 +133,7 @@ def main(argv=None):
                             key = _key(scene, state, form, damping, p, n)
                             if key not in cache:
                                 cache[key] = map_entry(scene, state, form, damping, p, n).as_dict()
-                                _save(cache)
+                                _save(cache, cache_path)
                             entries.append(cache[key])
                     grow = sum(1 for e in entries if not e.get("note") and e["max_real"] > 1e-2)
                     refused = sum(1 for e in entries if e.get("note", "").startswith("refused"))
@@ -139,7 +145,7 @@ def main(argv=None):
                     print(table(entries, args.degrees, args.n, damping))
                     if not args.no_plots:
                         name = f"stability_map_{scene}_{state.replace('=', '')}_{form}_{damping}.png"
-                        heatmap(entries, args.degrees, args.n, title, IMG / name)
+                        heatmap(entries, args.degrees, args.n, title, img / name)
 
 
 if __name__ == "__main__":

@@ -1,27 +1,34 @@
 """Stability stress tests: long horizons, fast spin, large rotations, many small steps.
 
-    python benchmarks/stress.py [--quick]
+    python benchmarks/stress.py [--quick] [--only NAME ...]
 
 Prints one row per scenario (steps, CPU time, energy drift, orthogonality error, the
 scenario's own figure) and saves ``docs/img/stress_*.png`` (energy drift and
-orthogonality error against time). The fast versions in CI are
+orthogonality error against time). ``--quick``: the scenarios ``QUICK_ONLY`` over their
+shortest spans (``SMOKE``), figures in a temporary directory or ``--out``. The fast versions in CI are
 ``tests/problems/test_problems_beam_stress.py``.
 """
 
 from __future__ import annotations
 
-import argparse
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
+from liegroup_int.bench.table import figure_dir, markdown, parser
+from liegroup_int.bench.timing import cpu
 from liegroup_int.io import read_history
 from liegroup_int.runner import RunError, run_scene
 from liegroup_int.scenes import load_scene
 
 IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
+#: the smoke run: two scenarios over a few output intervals, undamped and without the
+#: start-up spectrum guard (a dense spectrum takes seconds for the helix)
+QUICK_ONLY = ("pendulum_10s", "helix_5s")
+_SMOKE = {"material.kelvin_voigt": 0.0, "guard.spectrum": False}
+SMOKE = {"pendulum_10s": {"t_end": 0.01, "output.every": 0.002, **_SMOKE},
+         "helix_5s": {"t_end": 0.002, "output.every": 0.0005, **_SMOKE}}
 
 SCENARIOS = {
     # name: (scene, overrides, quick overrides, note)
@@ -65,23 +72,22 @@ SCENARIOS = {
 }
 
 
-def run(name, quick):
+def run(name, quick, img: Path):
     scene_name, ov, qov, note = SCENARIOS[name]
-    ov = {**ov, **(qov if quick else {}), "output.hdf5": False}
+    ov = {**ov, **(qov if quick else {}), **(SMOKE.get(name, {}) if quick else {}), "output.hdf5": False,
+          "output.plots": False}
     if "orth_error" not in ov.get("output.quantities", ["orth_error"]):
         ov["output.quantities"] = list(ov["output.quantities"]) + ["orth_error"]
     scene = load_scene(scene_name, ov)
     out = Path(tempfile.mkdtemp(prefix=f"stress_{name}_"))
-    t0 = time.process_time()
     status, err = "ok", ""
     try:
-        res = run_scene(scene, out)
+        res, cpu_s = cpu(lambda: run_scene(scene, out))
         steps = res.summary["steps"]
     except RunError as exc:
-        status, err, steps = "blow-up", str(exc).split(" (outputs")[0], None
-    cpu = time.process_time() - t0
+        status, err, steps, cpu_s = "blow-up", str(exc).split(" (outputs")[0], None, float("nan")
     h = read_history(out / "history.csv")
-    row = {"name": name, "note": note, "status": status, "steps": steps, "cpu_s": cpu, "t_reached": float(h["t"][-1]),
+    row = {"name": name, "note": note, "status": status, "steps": steps, "cpu_s": cpu_s, "t_reached": float(h["t"][-1]),
            "error": err}
     if "energy" in h and len(h["t"]) > 1:
         scale = max(np.max(np.abs(h.get("kinetic", h["energy"]))), 1e-300)
@@ -90,11 +96,11 @@ def run(name, quick):
         row["orth_max"] = float(np.max(h["orth_error"]))
     if "h_z" in h:
         row["hz_drift_rel"] = float(np.max(np.abs(h["h_z"] - h["h_z"][0])) / abs(h["h_z"][0]))
-    plot(name, h)
+    plot(name, h, img)
     return row
 
 
-def plot(name, h):
+def plot(name, h, img: Path):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -112,25 +118,23 @@ def plot(name, h):
         a.grid(alpha=0.3)
     fig.suptitle(name)
     fig.tight_layout()
-    IMG.mkdir(parents=True, exist_ok=True)
-    fig.savefig(IMG / f"stress_{name}.png", dpi=100)
+    fig.savefig(img / f"stress_{name}.png", dpi=100)
     plt.close(fig)
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
+    ap = parser(__doc__, quick_help="two scenarios over a few output intervals")
     ap.add_argument("--only", nargs="*", default=None)
     a = ap.parse_args(argv)
-    rows = [run(n, a.quick) for n in (a.only or SCENARIOS)]
-    print(f"{'scenario':20s} {'status':8s} {'steps':>9s} {'CPU s':>8s} {'t reached':>9s} {'dE/Ekin':>9s} "
-          f"{'orth max':>9s} {'dh_z/h_z':>9s}  note")
+    img = figure_dir(a, IMG)
+    rows = [run(n, a.quick, img) for n in (a.only or (QUICK_ONLY if a.quick else SCENARIOS))]
+    print(markdown(["scenario", "status", "steps", "CPU s", "t reached", "dE/Ekin", "orth max", "dh_z/h_z", "note"],
+                   [[r["name"], r["status"], r["steps"], f"{r['cpu_s']:.1f}", f"{r['t_reached']:.4g}",
+                     r.get("energy_drift_rel"), r.get("orth_max"), r.get("hz_drift_rel"), r["note"]] for r in rows]))
     for r in rows:
-        print(f"{r['name']:20s} {r['status']:8s} {str(r['steps']):>9s} {r['cpu_s']:8.1f} {r['t_reached']:9.4g} "
-              f"{r.get('energy_drift_rel', float('nan')):9.2e} {r.get('orth_max', float('nan')):9.2e} "
-              f"{r.get('hz_drift_rel', float('nan')):9.2e}  {r['note']}")
         if r["error"]:
-            print(f"{'':20s} {r['error']}")
+            print(f"{r['name']}: {r['error']}")
+    print(f"figures: {img}")
     return rows
 
 

@@ -81,7 +81,7 @@ class Plan:
             raise ValueError(f"plan {self.scene}: every={self.every} must divide t_end={self.t_end}")
         if not self.discretizations:
             raise ValueError(f"plan {self.scene}: no discretizations")
-        from ..problems.beam.problem import ALL_FORMULATIONS as FORMULATIONS
+        from .beam_internals import ALL_FORMULATIONS as FORMULATIONS
 
         if not self.formulations or any(f not in FORMULATIONS for f in self.formulations) \
                 or len(set(self.formulations)) != len(self.formulations):

@@ -23,10 +23,11 @@ import numpy as np
 
 from ..groups.so3 import exp_so3
 from ..integrators import eigenvalues, integrate_fixed, resolve_method, spectral_radius, stable_step
+from ..integrators.spectrum import GROWTH_THRESHOLD
 from ..problems.beam import BeamState
-from ..problems.beam.damping import GROWTH_THRESHOLD, first_frequency, size_kelvin_voigt
 from ..scenes import load_scene
 from ..scenes.beam import problem
+from .beam_internals import first_frequency, size_kelvin_voigt
 
 
 @dataclass

@@ -52,9 +52,9 @@ from ..integrators import (
     spectral_radius,
     stable_step,
 )
-from ..problems.beam.damping import size_kelvin_voigt
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
+from .beam_internals import size_kelvin_voigt
 from .plans import Plan
 
 #: Fixed-step factors tried for the peer's stable step, largest first (times its estimate).
@@ -302,6 +302,23 @@ def run_peer(case, n_elements: int, t_end: float, every: float, model: str = "py
             return Run(family, f"{n_elements} el", dt, steps=r.steps, rhs_evals=r.steps, cpu_s=r.cpu_s,
                        t=r.t, tip=r.tip)
     return Run(family, f"{n_elements} el", math.nan, status="failed: no finite step in the ladder")
+
+
+def peer_dt_max(P, case, n_elements: int, t_end: float, every: float):
+    """Largest stable PyElastica step over ``[0, t_end]`` from :data:`PEER_DT_FACTORS`
+    times the wave/shear estimate (stable: finite and ``|tip| < 2 L``), with ``P`` the
+    :mod:`pyelastica_peer` module. Returns ``(dt_max, dt_unstable, run_at_dt_max)``
+    (``dt_unstable``: the next larger step tried, which failed; nan if the first worked)."""
+    w_sr = math.sqrt(case.G * case.A / (case.rho * min(case.I1, case.I2)))
+    est = min(case.length / n_elements / case.wave_speed, 2.0 / w_sr)
+    bad = math.nan
+    for f in PEER_DT_FACTORS:
+        dt = fit_step(f * est, every)
+        r = P.run(case, n_elements, dt, t_end, every)
+        if r.finite and np.all(np.abs(r.tip) < 2 * case.length):
+            return dt, bad, r
+        bad = dt
+    raise RuntimeError(f"{case.name} n={n_elements}: no stable PyElastica step found")
 
 
 # ----------------------------------------------------------------------------- errors and ratios

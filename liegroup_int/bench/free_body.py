@@ -1,4 +1,4 @@
-"""The README's free rigid body, shared by ``rigid_body_work_precision.py``.
+"""The README's free rigid body, the case of ``benchmarks/rigid_body_work_precision.py``.
 
 State ``y = (R, W)`` on SO(3) x R^3 (``Product(SO3, Rn(3))``, stored flat: ``R`` row by
 row, then ``W``), ``I = (1, 2, 3)``, ``R0 = I``, ``W0 = (0.01, 5.0, 0.01)`` (spin about the
@@ -14,29 +14,19 @@ Three forms of the same right-hand side:
   ``scipy.integrate.solve_ivp``, state ``(q, W)``, ``q' = q (x) (0, W) / 2``, as plain floats
   or written the usual NumPy way.
 
-Run as a script, it times the first calls of ``integrate`` with :func:`f_njit` in this fresh
-process (numba compiles ``f`` and the engine's loops for it; a user's ``f`` is not cached on
-disk) and prints one JSON line::
-
-    python benchmarks/free_body_case.py --first-call rkmk45
+:func:`first_calls` times the first calls of ``integrate`` with :func:`f_njit` in a fresh
+process (numba compiles ``f`` and the engine's loops for it; a user's ``f`` is not cached
+on disk): ``benchmarks/free_body_first_call.py``.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import sys
 import time
 
 import numpy as np
 from numba import njit
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
-
-from liegroup_int import SO3, Product, Rn, integrate  # noqa: E402
+from .. import SO3, Product, Rn, integrate
 
 INERTIA = (1.0, 2.0, 3.0)
 W0 = (0.01, 5.0, 0.01)
@@ -100,18 +90,25 @@ def energy(W) -> float:
 E0 = energy(np.array(W0))
 
 
-def first_calls(method: str) -> dict:
-    """CPU seconds of the first and the second ``integrate`` call with :func:`f_njit`."""
+def first_calls(method: str, t_end: float = T_END) -> dict:
+    """CPU seconds of the first and the second ``integrate`` call with :func:`f_njit`
+    over ``[0, t_end]`` (fixed step ``T_END / 2000``, or ``rtol = atol = 1e-8``)."""
     kw = {"rtol": 1e-8, "atol": 1e-8} if method in ("rkmk32", "rkmk45", "rkmk65") else {"dt": T_END / 2000}
     out = {"method": method}
     for key in ("first", "second"):
         t0 = time.process_time()
-        integrate(f_njit, Y0, (0.0, T_END), space=SPACE, method=method, **kw)
+        integrate(f_njit, Y0, (0.0, t_end), space=SPACE, method=method, **kw)
         out[key] = time.process_time() - t0
     return out
 
 
-if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--first-call", metavar="METHOD", required=True)
-    print(json.dumps(first_calls(ap.parse_args().first_call)))
+def first_calls_fresh(method: str, t_end: float = T_END) -> dict:
+    """:func:`first_calls` of ``method`` in a new Python process (nothing compiled yet)."""
+    import json
+    import subprocess
+    import sys
+
+    code = f"import json; from liegroup_int.bench.free_body import first_calls; " \
+           f"print(json.dumps(first_calls({method!r}, {t_end!r})))"
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
