@@ -29,13 +29,13 @@ For each rule of ``space.quadrature`` (liegroup_int.iga.quadrature.RULES):
 
 from __future__ import annotations
 
-import argparse
 import statistics
 import time
 
 import numpy as np
 
 from liegroup_int.integrators import eigenvalues, integrate_fixed, jacobian, resolve_method, spectral_radius
+from liegroup_int.bench.table import parser
 from liegroup_int.iga.quadrature import RULES
 from liegroup_int.problems.beam.galerkin_linear import energy_nullity, natural_frequencies
 from liegroup_int.scenes import load_scene
@@ -114,38 +114,38 @@ def run_pendulum(pb, y0, lam: float, gamma: float, t_end: float = 0.2):
     return y, float(np.max(np.abs(rec[:, 0] - pb.energy(y0)))), float(rec[:, 1].max())
 
 
-def energy_table(rules) -> None:
-    ref_pb = galerkin("pendulum", "gauss", 4, 61, **{"material.kelvin_voigt": 0.0})
+def energy_table(rules, refs=(61, 81), t_end=0.2) -> None:
+    ref_pb = galerkin("pendulum", "gauss", 4, refs[0], **{"material.kelvin_voigt": 0.0})
     y0 = ref_pb.initial_state()
-    yr = run_pendulum(ref_pb, y0, spectral_radius(ref_pb, 0.0, y0), 0.5)[0]
-    ref_pb2 = galerkin("pendulum", "gauss", 4, 81, **{"material.kelvin_voigt": 0.0})
+    yr = run_pendulum(ref_pb, y0, spectral_radius(ref_pb, 0.0, y0), 0.5, t_end)[0]
+    ref_pb2 = galerkin("pendulum", "gauss", 4, refs[1], **{"material.kelvin_voigt": 0.0})
     y02 = ref_pb2.initial_state()
-    yr2 = run_pendulum(ref_pb2, y02, spectral_radius(ref_pb2, 0.0, y02), 0.5)[0]
+    yr2 = run_pendulum(ref_pb2, y02, spectral_radius(ref_pb2, 0.0, y02), 0.5, t_end)[0]
     tip_ref = ref_pb.tip(yr)
-    print(f"pendulum tip at 0.2 s (gauss, n_ctrl = 61, |lambda| h = 0.5): {tip_ref}; "
-          f"change to n_ctrl = 81: {np.linalg.norm(ref_pb2.tip(yr2) - tip_ref):.1e} m\n")
-    print("| rule | n_ctrl | energy drift over 0.2 s [J] | largest kinetic energy [J] | tip error at 0.2 s [m] |")
+    print(f"pendulum tip at {t_end:g} s (gauss, n_ctrl = {refs[0]}, |lambda| h = 0.5): {tip_ref}; "
+          f"change to n_ctrl = {refs[1]}: {np.linalg.norm(ref_pb2.tip(yr2) - tip_ref):.1e} m\n")
+    print(f"| rule | n_ctrl | energy drift over {t_end:g} s [J] | largest kinetic energy [J] | tip error at {t_end:g} s [m] |")
     print("|---|---|---|---|---|")
     for rule in rules:
         pb = galerkin("pendulum", rule, 4, 31, **{"material.kelvin_voigt": 0.0})
         y0 = pb.initial_state()
-        y, drift, kin = run_pendulum(pb, y0, spectral_radius(pb, 0.0, y0), 2.0)
+        y, drift, kin = run_pendulum(pb, y0, spectral_radius(pb, 0.0, y0), 2.0, t_end)
         print(f"| {rule} | 31 | {drift:.1e} | {kin:.4g} | {np.linalg.norm(pb.tip(y) - tip_ref):.1e} |",
               flush=True)
 
 
-def tip_table(rules, sizes) -> None:
+def tip_table(rules, sizes, refs=(81, 61), t_end=0.2) -> None:
     """Pendulum (p = 4, undamped) tip at 0.2 s, RKMK4 at |lambda| h = 0.5, against the gauss
     rule at n_ctrl = 81: space convergence."""
     def tip(rule, n):
         pb = galerkin("pendulum", rule, 4, n, **{"material.kelvin_voigt": 0.0})
         y0 = pb.initial_state()
-        return pb.tip(run_pendulum(pb, y0, spectral_radius(pb, 0.0, y0), 0.5)[0])
+        return pb.tip(run_pendulum(pb, y0, spectral_radius(pb, 0.0, y0), 0.5, t_end)[0])
 
-    ref = tip("gauss", 81)
-    print(f"pendulum tip at 0.2 s, reference (gauss, n_ctrl = 81, |lambda| h = 0.5): {ref}; "
-          f"difference to n_ctrl = 61: {np.linalg.norm(tip('gauss', 61) - ref):.1e} m\n")
-    print("| rule | tip error at 0.2 s [m], n_ctrl " + ", ".join(map(str, sizes)) + " | log-log slope |")
+    ref = tip("gauss", refs[0])
+    print(f"pendulum tip at {t_end:g} s, reference (gauss, n_ctrl = {refs[0]}, |lambda| h = 0.5): {ref}; "
+          f"difference to n_ctrl = {refs[1]}: {np.linalg.norm(tip('gauss', refs[1]) - ref):.1e} m\n")
+    print(f"| rule | tip error at {t_end:g} s [m], n_ctrl " + ", ".join(map(str, sizes)) + " | log-log slope |")
     print("|---|---|---|")
     for rule in rules:
         err = [np.linalg.norm(tip(rule, n) - ref) for n in sizes]
@@ -224,21 +224,23 @@ def cost_table(rules, sizes, steps: int) -> None:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="p = 4 only, n_ctrl 11 21 (cost: 21 61), 500 steps")
-    ap.add_argument("--rules", nargs="+", default=list(RULES), choices=list(RULES))
+    ap = parser(__doc__, "p = 4 only, rules gauss and gauss-p, n_ctrl 11 21 (cost: 21, 200 steps)")
+    ap.add_argument("--rules", nargs="+", default=None, choices=list(RULES),
+                    help="rules to compare (default: all; --quick: gauss and gauss-p)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["spectrum", "energy", "tip", "rollup", "cost"])
     args = ap.parse_args(argv)
     degrees, sizes = ((4,), (11, 21)) if args.quick else ((4, 3, 2), (11, 21, 41))
-    cost_sizes, steps = ((21, 61), 500) if args.quick else ((21, 41, 61, 121), 2000)
+    cost_sizes, steps = ((21,), 200) if args.quick else ((21, 41, 61, 121), 2000)
+    if args.rules is None:
+        args.rules = ["gauss", "gauss-p"] if args.quick else list(RULES)
     if "spectrum" not in args.skip:
         spectrum_table(args.rules, degrees, sizes, reference_frequencies())
         print()
     if "energy" not in args.skip:
-        energy_table(args.rules)
+        energy_table(args.rules, *(((31, 41), 0.05) if args.quick else ()))
         print()
     if "tip" not in args.skip:
-        tip_table(args.rules, sizes)
+        tip_table(args.rules, sizes, *(((41, 31), 0.05) if args.quick else ()))
         print()
     if "rollup" not in args.skip:
         rollup_table(args.rules)
