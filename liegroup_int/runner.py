@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .budget import check_budget
 from .guards import EnergyBalance, diagnose, start_checks
 from .integrators import (BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method,
                           stepper_for)
@@ -331,6 +332,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     out_dir = Path(out_dir)
     clock0 = time.perf_counter()
     start = _start(scene, resume)
+    # the outputs' count, memory and disk, before any check that takes time
+    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir)
     # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
     # step or a spurious growing mode at rest
     guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
