@@ -84,14 +84,17 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _claim(out: Path, overwrite: bool) -> None:
-    """Refuse an output directory that holds another run, or clear it with ``--overwrite``
-    (stale VTU files and plots must not sit next to the new ones)."""
-    if not (out / "summary.json").exists() and not (out / "history.csv").exists():
+def _claim(out: Path, overwrite: bool, scene: str) -> None:
+    """Refuse an output directory that holds another run, saying what it holds and what to
+    do (:func:`liegroup_int.runner.run_dir_advice`), or clear it with ``--overwrite`` (stale
+    VTU files and plots must not sit next to the new ones)."""
+    from .runner import run_dir_advice
+
+    advice = run_dir_advice(out, scene)
+    if advice is None:
         return
     if not overwrite:
-        raise SceneError(f"{out}: holds a run already; give --overwrite to replace it, --out another directory, "
-                         f"or --resume {out} to continue it")
+        raise SceneError(advice)
     import shutil
 
     shutil.rmtree(out)
@@ -367,7 +370,7 @@ def main(argv: list[str] | None = None) -> int:
                     scene = _load(args)
                     out = args.out if args.out is not None else Path("runs") / scene.name
                     scene_name = scene.name
-                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite))
+                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene))
             except RunError as exc:
                 print(f"error: {exc}", file=sys.stderr)
                 return 130 if "interrupted" in str(exc) else 3

@@ -4,17 +4,22 @@ Files in the output directory:
 
 * ``history.csv`` (streamed rows), ``results.h5`` (history and state snapshots, streamed),
 * ``checkpoint.npz`` (state at the last checkpointed output time),
-* ``summary.json`` (written at the end, also for failed or interrupted runs),
+* ``summary.json`` (``status = "running"`` from the start, rewritten at every checkpoint with
+  its time ``checkpoint_t``; final at the end, also for failed or interrupted runs),
 * ``history.png`` and, for problems that record shapes, ``shapes.png`` / ``shapes.npz``.
 
-Checkpoints are taken at output times, every ``output.checkpoint_every`` wall seconds, at
-the end, and when SIGINT/SIGTERM arrives (the run then stops at its next output time).
+Checkpoints are taken at output times: the first output after the start, the first after
+5 wall seconds, then every ``output.checkpoint_every`` wall seconds; at the end; and when
+SIGINT/SIGTERM arrives (the run then stops at its next output time). A run killed after its
+first output can be resumed; :func:`run_dir_advice` says what a directory holds and how to
+continue or restart it.
 Resuming from a checkpoint continues on the same time grid, so a fixed-step run resumed
 from an output time reproduces the uninterrupted run bit for bit.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import sys
@@ -170,12 +175,19 @@ class Progress:
             self.bar.close()
 
 
+#: Wall seconds after which the second checkpoint is due (the first is at the first output
+#: time), unless ``output.checkpoint_every`` is shorter.
+EARLY_CHECKPOINT_S = 5.0
+
+
 class Checkpointer:
     """Observer: writes checkpoints (with the run's counters ``stats``) at output times.
 
-    A checkpoint is written at an output time when ``every_s`` wall seconds have passed
-    since the last one, or when a stop was requested (signal); after a requested stop it
-    raises :class:`Interrupted`.
+    A checkpoint is written at the first output time after the start, at the first output time after
+    :data:`EARLY_CHECKPOINT_S` wall seconds, then whenever ``every_s`` wall seconds have
+    passed since the last one (``every_s = 0``: none of these), and when a stop was
+    requested (signal); after a requested stop it raises :class:`Interrupted`. A run killed
+    after its first output can thus be resumed.
     """
 
     def __init__(self, path: Path, every_s: float, to_arrays, meta: dict, stats: Stats):
@@ -184,9 +196,14 @@ class Checkpointer:
         self.last_wall = time.perf_counter()
         self.stop_requested = False
         self.t_saved: float | None = None
+        self.saves = 0
+        #: the run's start time: the first checkpoint comes at the first output after it
+        self.t_start = -math.inf
         #: called before each checkpoint (buffered writers flush, so that their files hold
         #: every output up to the checkpoint a resume continues from)
         self.flushers: list = []
+        #: called with the checkpoint time after each checkpoint (the running summary)
+        self.after_save: list = []
 
     def save(self, t, y):
         for flush in self.flushers:
@@ -195,10 +212,18 @@ class Checkpointer:
                                                                                    "h_max": self.stats.h_max},
                          self.meta)
         self.t_saved = t
+        self.saves += 1
         self.last_wall = time.perf_counter()
+        for after in self.after_save:
+            after(t)
+
+    def _wait_s(self) -> float:
+        """Wall seconds from the last checkpoint to the next one."""
+        return min(self.every_s, EARLY_CHECKPOINT_S) if self.saves < 2 else self.every_s
 
     def __call__(self, t, y):
-        due = self.every_s > 0 and time.perf_counter() - self.last_wall >= self.every_s
+        first = self.saves == 0 and t > self.t_start
+        due = self.every_s > 0 and (first or time.perf_counter() - self.last_wall >= self._wait_s())
         if due or self.stop_requested:
             self.save(t, y)
         if self.stop_requested:
@@ -332,19 +357,13 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     out_dir = Path(out_dir)
     clock0 = time.perf_counter()
     start = _start(scene, resume)
-    # the outputs' count, memory and disk, before any check that takes time
-    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir)
-    # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
-    # step or a spurious growing mode at rest
-    guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
-    warnings = list(warnings) + _output_warnings(scene, start)
-    for w in warnings:
-        print(f"warning: {w}", file=sys.stderr)
+    guard_facts, warnings = _checks(scene, start, out_dir)
     if claim is not None:
         claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     outs = _outputs(scene, start, out_dir, resume)
     summary = _summary_head(scene, start, resume, guard_facts, warnings)
+    outs.ckpt.after_save.append(_running_summary(out_dir / "summary.json", summary, start.stats, outs.ckpt.t_saved))
     compile_s = warm_up(start.sim.problem, start.tab, start.t0, start.y0, start.dt)
     if compile_s > 2.0 and not quiet:
         print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
@@ -366,6 +385,18 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         exc.interrupted = end.status == "interrupted"
         raise exc
     return RunResult(out_dir, summary, outs.history)
+
+
+def _checks(scene: Scene, start: "_Start", out_dir: Path) -> tuple[dict, list]:
+    """Refusals before anything is written (SceneError): the outputs' count, memory and disk
+    first (cheap), then the guards (a dt beyond the stable step, a spurious growing mode at
+    rest). Returns the guards' facts and the warnings, printed on stderr."""
+    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir)
+    guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
+    warnings = list(warnings) + _output_warnings(scene, start)
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    return guard_facts, warnings
 
 
 def _timing(compile_s: float, setup_s: float, loop_s: float, output_s: float) -> dict:
@@ -478,6 +509,8 @@ def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) ->
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": scene.integrator.method,
             "dt": start.dt, "energy0": e0}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, start.stats)
+    ckpt.t_saved = t0 if resume is not None else None  # a resumed run starts from its checkpoint
+    ckpt.t_start = t0
     if h5 is not None:
         ckpt.flushers.append(h5.flush)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
@@ -527,6 +560,19 @@ def _summary_head(scene: Scene, start: _Start, resume, guard_facts: dict, warnin
         **({"guards": guard_facts} if guard_facts else {}),
         **({"warnings": warnings} if warnings else {}),
     }
+
+
+def _running_summary(path: Path, head: dict, stats: Stats, t_checkpoint: float | None):
+    """Writes summary.json of a run under way (``status = "running"``, the counters and the
+    time of the last checkpoint, ``None`` before the first), now and as
+    ``write(t_checkpoint)`` after each checkpoint."""
+
+    def write(t_checkpoint: float | None) -> None:
+        write_json(path, head | {"status": "running", "checkpoint_t": t_checkpoint, "t_reached": t_checkpoint}
+                   | stats.as_dict())
+
+    write(t_checkpoint)
+    return write
 
 
 @dataclass
@@ -599,7 +645,8 @@ def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool
 
 
 def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dict:
-    tail = {"status": end.status, "t_reached": end.t, "history_rows": outs.writer.rows}
+    tail = {"status": end.status, "t_reached": end.t, "checkpoint_t": outs.ckpt.t_saved,
+            "history_rows": outs.writer.rows}
     if outs.balance is not None:
         b = outs.balance
         tail["energy_balance"] = {"defect": b.defect, "worst_fraction": b.worst, "energy_scale": b.scale,
@@ -632,6 +679,46 @@ RESUME_KEYS = ("t_end", "output.plots", "output.paraview", "output.checkpoint_ev
                "guard.energy_balance")
 
 
+#: Files whose presence means a directory holds a run.
+RUN_FILES = ("summary.json", "history.csv", "results.h5", "checkpoint.npz")
+
+
+def _checkpoint_time(path: Path) -> float | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return float(z["t"])
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def run_dir_advice(out_dir: Path, scene: str | None = None) -> str | None:
+    """What ``out_dir`` holds and what to do with it, in one line (the refusal of a new run
+    into it and of a resume without checkpoint give the same); ``None`` when it holds no run.
+
+    Parameters
+    ----------
+    out_dir : Path
+    scene : str, optional
+        The scene to name in the command when summary.json does not (killed early).
+    """
+    out_dir = Path(out_dir)
+    if not any((out_dir / f).exists() for f in RUN_FILES):
+        return None
+    try:
+        summary = json.loads((out_dir / "summary.json").read_text())
+    except (OSError, ValueError):
+        summary = {}
+    source = str(summary.get("source") or scene or "SCENE").removeprefix("builtin:")
+    status = summary.get("status", "no summary")
+    t = _checkpoint_time(out_dir / "checkpoint.npz") if (out_dir / "checkpoint.npz").exists() else None
+    if t is not None:
+        return (f"{out_dir}: holds a run of {source} ({status}; checkpoint at t={t:.6g} s); continue it with "
+                f"`liegroup-int run --resume {out_dir}` (--set t_end=T to extend it), replace it with --overwrite, "
+                f"or give --out another directory")
+    return (f"{out_dir}: holds a run of {source} ({status}) without a checkpoint, so it cannot be resumed; start it "
+            f"again with `liegroup-int run {source} --out {out_dir} --overwrite`, or give --out another directory")
+
+
 def resume_run(out_dir: Path, overrides: dict, quiet: bool = True, scene: str | None = None) -> RunResult:
     """Continue the run stored in ``out_dir`` from its checkpoint (``--resume DIR``).
 
@@ -640,7 +727,7 @@ def resume_run(out_dir: Path, overrides: dict, quiet: bool = True, scene: str | 
     :class:`SceneError` before anything is written."""
     path = Path(out_dir) / "checkpoint.npz"
     if not path.exists():
-        raise SceneError(f"{out_dir}: no checkpoint.npz to resume from")
+        raise SceneError(run_dir_advice(out_dir, scene) or f"{out_dir}: holds no run to resume (no checkpoint.npz)")
     ckpt = read_checkpoint(path)
     meta = ckpt["meta"]
     keys = dict(meta["scene_keys"])
