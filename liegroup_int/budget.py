@@ -91,7 +91,11 @@ def free_disk(out_dir: Path) -> int:
 
 
 def _gib(n: float) -> str:
-    return f"{n / 2**30:.3g} GiB"
+    """Bytes in the largest binary unit below them (``1.5 MiB``, ``745 GiB``)."""
+    for unit, size in (("TiB", 2**40), ("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{n:.0f} B"
 
 
 def check_budget(scene, sim, y0, t0: float, dt: float | None, every: float, out_dir: Path,

@@ -53,6 +53,26 @@ class Interrupted(IntegrationError):
     """SIGINT/SIGTERM: the run stopped at an output time after writing a checkpoint."""
 
 
+class WriteFailed(IntegrationError):
+    """An output file could not be written (full disk, I/O error); the message names the
+    file and the error."""
+
+
+#: What output writers raise when a write fails (full disk, I/O errors; h5py's too).
+WRITE_ERRORS = (OSError,)
+#: What closing a file may raise after a failed write (h5py: RuntimeError on a file left
+#: unusable).
+CLOSE_ERRORS = (OSError, RuntimeError)
+
+
+def _write_error(exc: BaseException, path) -> str:
+    """``cannot write FILE: ERROR`` in one line (the file the error names, else ``path``)."""
+    where = getattr(exc, "filename", None) or path
+    text = str(exc).strip()
+    what = getattr(exc, "strerror", None) or (text.splitlines()[0] if text else type(exc).__name__)
+    return f"cannot write {where}: {what}"
+
+
 @dataclass
 class RunResult:
     out_dir: Path
@@ -206,24 +226,33 @@ class Checkpointer:
         self.after_save: list = []
 
     def save(self, t, y):
-        for flush in self.flushers:
-            flush()
-        write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
-                                                                                   "h_max": self.stats.h_max},
-                         self.meta)
+        """Flush the writers, write the checkpoint (atomically), then the running summary;
+        a failing write raises :class:`WriteFailed` and leaves the previous checkpoint."""
+        try:
+            for flush in self.flushers:
+                flush()
+            write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
+                                                                                       "h_max": self.stats.h_max},
+                             self.meta)
+        except WRITE_ERRORS as exc:
+            raise WriteFailed(_write_error(exc, self.path), t, self.stats.steps) from None
         self.t_saved = t
         self.saves += 1
         self.last_wall = time.perf_counter()
-        for after in self.after_save:
-            after(t)
+        try:
+            for after in self.after_save:
+                after(t)
+        except WRITE_ERRORS as exc:
+            raise WriteFailed(_write_error(exc, self.path.with_name("summary.json")), t, self.stats.steps) from None
 
     def _wait_s(self) -> float:
         """Wall seconds from the last checkpoint to the next one."""
         return min(self.every_s, EARLY_CHECKPOINT_S) if self.saves < 2 else self.every_s
 
     def __call__(self, t, y):
-        first = self.saves == 0 and t > self.t_start
-        due = self.every_s > 0 and (first or time.perf_counter() - self.last_wall >= self._wait_s())
+        # the starting point is no progress: a run killed before its first output starts again
+        due = self.every_s > 0 and t > self.t_start and (
+            self.saves == 0 or time.perf_counter() - self.last_wall >= self._wait_s())
         if due or self.stop_requested:
             self.save(t, y)
         if self.stop_requested:
@@ -277,6 +306,8 @@ def _shapes(snapshot, results: Path | None) -> dict | None:
 
     with h5py.File(results, "r") as f:
         snaps = f["snapshots"]
+        if "t" not in snaps:  # no output written
+            return None
         # datasets, read by the plugin as it needs them (the beam reads the control points)
         return snapshot.from_snapshots(snaps["t"][:], {k: snaps[k] for k in snaps if k != "t"})
 
@@ -375,16 +406,26 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         summary["wall_time_s"] = loop_s
     summary["timing"] = _timing(compile_s, t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
-    # the summary is complete before the plots: a slow or killed plot loses nothing computed
-    write_json(out_dir / "summary.json", summary)
-    if scene.output.plots:
-        _plots(scene, start, outs, out_dir, summary)
-    if end.error is not None:
-        exc = RunError(end.error + f" (outputs up to t={outs.ckpt.t_saved if end.status == 'interrupted' else end.t:.6g}"
-                       f" are in {out_dir})")
+    _finish(scene, start, outs, end, out_dir, summary)
+    return RunResult(out_dir, summary, outs.history)
+
+
+def _finish(scene: Scene, start: "_Start", outs: "_Outputs", end: "_End", out_dir: Path, summary: dict) -> None:
+    """Write the summary (complete before the plots: a slow or killed plot loses nothing
+    computed), then the plots unless a write failed; raise :class:`RunError` for a run that
+    stopped early or whose summary cannot be written."""
+    error = end.error
+    try:
+        write_json(out_dir / "summary.json", summary)
+        if scene.output.plots and not end.write_failed:
+            _plots(scene, start, outs, out_dir, summary)
+    except WRITE_ERRORS as exc:
+        error = error or f"{scene.name}: {_write_error(exc, out_dir / 'summary.json')}"
+    if error is not None:
+        upto = outs.ckpt.t_saved if end.status == "interrupted" else end.t
+        exc = RunError(error + ("" if end.write_failed else f" (outputs up to t={upto:.6g} are in {out_dir})"))
         exc.interrupted = end.status == "interrupted"
         raise exc
-    return RunResult(out_dir, summary, outs.history)
 
 
 def _checks(scene: Scene, start: "_Start", out_dir: Path) -> tuple[dict, list]:
@@ -585,33 +626,29 @@ class _End:
     y: object
     stats: Stats
     error: str | None
+    write_failed: bool = False
 
 
 def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet: bool, resumed: bool) -> _End:
     """The time loop with the observers at output times; progress at output times only (no
     per-step monitor, so a compiled problem runs the steps between two outputs in one call
-    of the engine). Failures are caught, diagnosed and returned, with the files closed."""
-    spec, t0, y0, stats = scene.integrator, start.t0, start.y0, start.stats
-    t_out = output_times(scene.t_end, start.every)
-    t_out = t_out[t_out > t0 + 1e-9 * start.every]
+    of the engine). Failures, a failing write among them, are caught, diagnosed and
+    returned, with the files closed."""
+    t0, y0, stats = start.t0, start.y0, start.stats
     progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
     observer = _observer(outs, progress, stats, skip_first=resumed)
     old_handlers = _install_signal_handlers(outs.ckpt)
     end = _End("ok", t0, y0, stats, None)
     try:
-        if start.dt is not None:
-            t, y, stats = integrate_fixed(start.sim.problem, start.tab, (t0, t_out[-1]), y0, start.dt, observer,
-                                          t_out, stats=stats)
-        else:
-            t, y, stats = integrate_adaptive(start.sim.problem, start.tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6,
-                                             spec.atol or 1e-9, observer, t_out,
-                                             h_max=start.sim.info.get("dt_auto", np.inf), stats=stats)
+        t, y, stats = _loop(scene, start, observer)
         outs.ckpt.save(t, y)
         end = _End("ok", t, y, stats, None)
     except Interrupted as exc:
         end = _End("interrupted", exc.t, y0, stats,
                    f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "
                    f"--resume {out_dir}")
+    except WriteFailed as exc:
+        end = _End("failed", exc.t, y0, stats, _write_failed(scene, exc, outs.ckpt.t_saved, out_dir), True)
     except IntegrationError as exc:
         error = f"{scene.name}: {exc}"
         cause = diagnose(scene, start.sim, start.tab, start.dt, outs.last["t"], outs.last["y"])
@@ -619,11 +656,48 @@ def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet
     finally:
         for sig, h in old_handlers.items():
             signal.signal(sig, h)
-        outs.writer.close()
-        if outs.h5 is not None:
-            outs.h5.close()
+        closing = _close_writers(outs)
         progress.close(end.t)
+    if closing is not None and end.error is None:  # the last block of a file could not be written
+        end = _End("failed", end.t, end.y, end.stats,
+                   _write_failed(scene, WriteFailed(closing, end.t, end.stats.steps), outs.ckpt.t_saved, out_dir), True)
     return end
+
+
+def _loop(scene: Scene, start: _Start, observer):
+    """``(t, y, stats)`` at t_end: the fixed-step or adaptive integration from the start."""
+    spec, t0 = scene.integrator, start.t0
+    t_out = output_times(scene.t_end, start.every)
+    t_out = t_out[t_out > t0 + 1e-9 * start.every]
+    if start.dt is not None:
+        return integrate_fixed(start.sim.problem, start.tab, (t0, t_out[-1]), start.y0, start.dt, observer, t_out,
+                               stats=start.stats)
+    return integrate_adaptive(start.sim.problem, start.tab, (t0, t_out[-1]), start.y0, spec.rtol or 1e-6,
+                              spec.atol or 1e-9, observer, t_out, h_max=start.sim.info.get("dt_auto", np.inf),
+                              stats=start.stats)
+
+
+def _write_failed(scene: Scene, exc: WriteFailed, t_checkpoint: float | None, out_dir: Path) -> str:
+    """One line: the file and the error, and what the directory keeps to go on from."""
+    keep = (f"the checkpoint at t={t_checkpoint:.6g} is kept: free space, then `liegroup-int run --resume {out_dir}`"
+            if t_checkpoint is not None else
+            f"no checkpoint yet: free space, then `liegroup-int run {scene.source.removeprefix('builtin:')} "
+            f"--out {out_dir} --overwrite`")
+    return f"{scene.name}: {exc} at t={exc.t:.6g}; {keep}"
+
+
+def _close_writers(outs: _Outputs) -> str | None:
+    """Close the history and HDF5 writers (writing what they buffer); ``None``, or the
+    first failing write as ``cannot write FILE: ERROR``."""
+    failed = None
+    for w in (outs.writer, outs.h5):
+        if w is None:
+            continue
+        try:
+            w.close()
+        except CLOSE_ERRORS as exc:
+            failed = failed or _write_error(exc, w.path)
+    return failed
 
 
 def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool):
@@ -637,11 +711,22 @@ def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool
             return
         c = time.perf_counter()
         for obs in outs.observers:
-            obs(t, y)
+            try:
+                obs(t, y)
+            except WRITE_ERRORS as exc:
+                raise WriteFailed(_write_error(exc, _file_of(obs)), t, stats.steps) from None
         progress(t, y, stats)
         outs.output_s[0] += time.perf_counter() - c
 
     return observer
+
+
+def _file_of(observer) -> str:
+    """The file an output observer writes (for a failing write's message)."""
+    for attr in ("path", "pvd"):
+        if getattr(observer, attr, None) is not None:
+            return str(getattr(observer, attr))
+    return "the outputs"
 
 
 def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dict:

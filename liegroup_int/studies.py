@@ -553,23 +553,23 @@ def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapp
             raise ValueError(f"reference row (run {ref.get('run')}) did not succeed")
     if quantity == "auto":
         quantity = default_quantity(ref)
+    finer = "larger" if direction > 0 else "smaller"
+    return [_entry(row, ref, param, finer, quantity) for row in coarse_to_fine(rows, param, direction) if row is not ref]
+
+
+def _entry(row: Mapping, ref: Mapping, param: str, finer: str, quantity: str) -> dict:
+    """One convergence-table entry: ``row``'s error in ``quantity`` against ``ref``."""
     q_ref = quantity_vector(ref, quantity)
     scale = float(np.linalg.norm(q_ref))
-    table = []
-    for row in coarse_to_fine(rows, param, direction):
-        if row is ref:
-            continue
-        err = None
-        if row.get("status") == "ok":
-            err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
-        rel = None if err is None or scale == 0.0 else err / scale
-        table.append({"run": row.get("run"), "param": param, "value": row["overrides"][param],
-                      "finer": "larger" if direction > 0 else "smaller", "quantity": quantity,
-                      "status": row.get("status"), "error": err, "rel_error": rel,
-                      "round_off": rel is not None and rel <= round_off_floor(row.get("steps"), ref.get("steps")),
-                      "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"),
-                      "rhs_evals": row.get("rhs_evals"), "reference_run": ref.get("run")})
-    return table
+    err = None
+    if row.get("status") == "ok":
+        err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
+    rel = None if err is None or scale == 0.0 else err / scale
+    return {"run": row.get("run"), "param": param, "value": row["overrides"][param], "finer": finer,
+            "quantity": quantity, "status": row.get("status"), "error": err, "rel_error": rel,
+            "round_off": rel is not None and rel <= round_off_floor(row.get("steps"), ref.get("steps")),
+            "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"), "rhs_evals": row.get("rhs_evals"),
+            "reference_run": ref.get("run")}
 
 
 #: A relative error within this factor of the accumulated rounding of a run is not a
