@@ -43,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
             st.add_argument("--values", required=True, nargs="+", metavar="V", help="its values")
             st.add_argument("--quantity", default="auto",
                             help="final field(s) compared, e.g. tip or R+omega_body (default: by problem)")
+            st.add_argument("--finer", choices=("larger", "smaller"), default=None,
+                            help="which values of KEY are finer (known for n_ctrl, degree, dt, rtol, atol)")
         else:
             st.add_argument("--grid", required=True, nargs="+", metavar="KEY=V1,V2", help="grid axes")
         st.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -82,14 +84,17 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _claim(out: Path, overwrite: bool) -> None:
-    """Refuse an output directory that holds another run, or clear it with ``--overwrite``
-    (stale VTU files and plots must not sit next to the new ones)."""
-    if not (out / "summary.json").exists() and not (out / "history.csv").exists():
+def _claim(out: Path, overwrite: bool, scene: str) -> None:
+    """Refuse an output directory that holds another run, saying what it holds and what to
+    do (:func:`liegroup_int.runner.run_dir_advice`), or clear it with ``--overwrite`` (stale
+    VTU files and plots must not sit next to the new ones)."""
+    from .runner import run_dir_advice
+
+    advice = run_dir_advice(out, scene)
+    if advice is None:
         return
     if not overwrite:
-        raise SceneError(f"{out}: holds a run already; give --overwrite to replace it, --out another directory, "
-                         f"or --resume {out} to continue it")
+        raise SceneError(advice)
     import shutil
 
     shutil.rmtree(out)
@@ -107,6 +112,10 @@ def _study(args) -> int:
     name = Path(args.scene).stem
     out = args.out if args.out is not None else Path("studies") / f"{name}-{args.command}"
     if args.command == "converge":
+        try:
+            studies.finer_direction(args.param, args.finer)
+        except ValueError as exc:
+            raise SceneError(f"converge: {exc}") from None
         grid = studies.expand_grid({args.param: studies.parse_values(args.param, args.values)})
     else:
         grid = studies.expand_grid(studies.parse_grid(args.grid))
@@ -130,7 +139,7 @@ def _study(args) -> int:
     table, no_table = None, None
     if args.command == "converge":
         try:
-            table = studies.convergence_table(rows, args.param, quantity=args.quantity)
+            table = studies.convergence_table(rows, args.param, quantity=args.quantity, finer=args.finer)
         except ValueError as exc:  # e.g. every run failed: the rows are still written
             no_table = str(exc)
     studies.write_study(out, rows, table, timing=split)
@@ -140,21 +149,34 @@ def _study(args) -> int:
         print(f"{r['run']:>4}  {r['overrides']}  {r['status']}  steps={r['steps']}  "
               f"wall={'-' if wall is None else format(wall, '.3g')} s")
     if table is not None:
-        for e in table:
-            if e["error"] is not None:
-                flag = "  (within 100x of round-off: not fitted)" if e.get("round_off") else ""
-                print(f"  {args.param} = {e['value']!r}: error {e['error']:.3e} (against run {e['reference_run']})"
-                      f"{flag}")
-        try:
-            print(f"fitted rate: {studies.table_rate(table):.3f}")
-        except ValueError as exc:
-            print(f"no rate fitted: {exc}")
+        _print_table(table)
     print(studies.format_time_split(split))
     if no_table is not None:
         first = next((r.get("error") for r in failed if r.get("error")), None)
         print(f"error: no convergence table: {no_table}" + (f" (run 0: {first})" if first else ""), file=sys.stderr)
     print(f"-> {out}")
     return 3 if failed else 0
+
+
+def _print_table(table) -> None:
+    """A convergence table, coarse to fine, and its fitted rate or why there is none."""
+    from . import studies
+
+    if table:
+        print(f"errors, coarse to fine, against the finest run (run {table[0]['reference_run']}; "
+              f"{table[0]['finer']} {table[0]['param']} is finer):")
+    for e in table:
+        if e["error"] is not None:
+            flag = "  (within 100x of round-off: not fitted)" if e.get("round_off") else ""
+            print(f"  {e['param']} = {e['value']!r}: error {e['error']:.3e}{flag}")
+        else:
+            print(f"  {e['param']} = {e['value']!r}: {e['status']}")
+    try:
+        fit = studies.fit_table(table)
+    except ValueError as exc:
+        print(f"no rate fitted: {exc}")
+        return
+    print(studies.format_fit(fit, table[0]["param"], table[0]["finer"]))
 
 
 def _spectrum(scene) -> int:
@@ -348,7 +370,7 @@ def main(argv: list[str] | None = None) -> int:
                     scene = _load(args)
                     out = args.out if args.out is not None else Path("runs") / scene.name
                     scene_name = scene.name
-                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite))
+                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene))
             except RunError as exc:
                 print(f"error: {exc}", file=sys.stderr)
                 return 130 if "interrupted" in str(exc) else 3

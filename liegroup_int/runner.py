@@ -4,17 +4,22 @@ Files in the output directory:
 
 * ``history.csv`` (streamed rows), ``results.h5`` (history and state snapshots, streamed),
 * ``checkpoint.npz`` (state at the last checkpointed output time),
-* ``summary.json`` (written at the end, also for failed or interrupted runs),
+* ``summary.json`` (``status = "running"`` from the start, rewritten at every checkpoint with
+  its time ``checkpoint_t``; final at the end, also for failed or interrupted runs),
 * ``history.png`` and, for problems that record shapes, ``shapes.png`` / ``shapes.npz``.
 
-Checkpoints are taken at output times, every ``output.checkpoint_every`` wall seconds, at
-the end, and when SIGINT/SIGTERM arrives (the run then stops at its next output time).
+Checkpoints are taken at output times: the first output after the start, the first after
+5 wall seconds, then every ``output.checkpoint_every`` wall seconds; at the end; and when
+SIGINT/SIGTERM arrives (the run then stops at its next output time). A run killed after its
+first output can be resumed; :func:`run_dir_advice` says what a directory holds and how to
+continue or restart it.
 Resuming from a checkpoint continues on the same time grid, so a fixed-step run resumed
 from an output time reproduces the uninterrupted run bit for bit.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import sys
@@ -27,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .budget import check_budget
 from .guards import EnergyBalance, diagnose, start_checks
 from .integrators import (BlowUpError, IntegrationError, Stats, integrate_adaptive, integrate_fixed, resolve_method,
                           stepper_for)
@@ -45,6 +51,26 @@ class RunError(RuntimeError):
 
 class Interrupted(IntegrationError):
     """SIGINT/SIGTERM: the run stopped at an output time after writing a checkpoint."""
+
+
+class WriteFailed(IntegrationError):
+    """An output file could not be written (full disk, I/O error); the message names the
+    file and the error."""
+
+
+#: What output writers raise when a write fails (full disk, I/O errors; h5py's too).
+WRITE_ERRORS = (OSError,)
+#: What closing a file may raise after a failed write (h5py: RuntimeError on a file left
+#: unusable).
+CLOSE_ERRORS = (OSError, RuntimeError)
+
+
+def _write_error(exc: BaseException, path) -> str:
+    """``cannot write FILE: ERROR`` in one line (the file the error names, else ``path``)."""
+    where = getattr(exc, "filename", None) or path
+    text = str(exc).strip()
+    what = getattr(exc, "strerror", None) or (text.splitlines()[0] if text else type(exc).__name__)
+    return f"cannot write {where}: {what}"
 
 
 @dataclass
@@ -169,12 +195,19 @@ class Progress:
             self.bar.close()
 
 
+#: Wall seconds after which the second checkpoint is due (the first is at the first output
+#: time), unless ``output.checkpoint_every`` is shorter.
+EARLY_CHECKPOINT_S = 5.0
+
+
 class Checkpointer:
     """Observer: writes checkpoints (with the run's counters ``stats``) at output times.
 
-    A checkpoint is written at an output time when ``every_s`` wall seconds have passed
-    since the last one, or when a stop was requested (signal); after a requested stop it
-    raises :class:`Interrupted`.
+    A checkpoint is written at the first output time after the start, at the first output time after
+    :data:`EARLY_CHECKPOINT_S` wall seconds, then whenever ``every_s`` wall seconds have
+    passed since the last one (``every_s = 0``: none of these), and when a stop was
+    requested (signal); after a requested stop it raises :class:`Interrupted`. A run killed
+    after its first output can thus be resumed.
     """
 
     def __init__(self, path: Path, every_s: float, to_arrays, meta: dict, stats: Stats):
@@ -183,21 +216,43 @@ class Checkpointer:
         self.last_wall = time.perf_counter()
         self.stop_requested = False
         self.t_saved: float | None = None
+        self.saves = 0
+        #: the run's start time: the first checkpoint comes at the first output after it
+        self.t_start = -math.inf
         #: called before each checkpoint (buffered writers flush, so that their files hold
         #: every output up to the checkpoint a resume continues from)
         self.flushers: list = []
+        #: called with the checkpoint time after each checkpoint (the running summary)
+        self.after_save: list = []
 
     def save(self, t, y):
-        for flush in self.flushers:
-            flush()
-        write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
-                                                                                   "h_max": self.stats.h_max},
-                         self.meta)
+        """Flush the writers, write the checkpoint (atomically), then the running summary;
+        a failing write raises :class:`WriteFailed` and leaves the previous checkpoint."""
+        try:
+            for flush in self.flushers:
+                flush()
+            write_checkpoint(self.path, t, self.to_arrays(y), self.stats.as_dict() | {"h_min": self.stats.h_min,
+                                                                                       "h_max": self.stats.h_max},
+                             self.meta)
+        except WRITE_ERRORS as exc:
+            raise WriteFailed(_write_error(exc, self.path), t, self.stats.steps) from None
         self.t_saved = t
+        self.saves += 1
         self.last_wall = time.perf_counter()
+        try:
+            for after in self.after_save:
+                after(t)
+        except WRITE_ERRORS as exc:
+            raise WriteFailed(_write_error(exc, self.path.with_name("summary.json")), t, self.stats.steps) from None
+
+    def _wait_s(self) -> float:
+        """Wall seconds from the last checkpoint to the next one."""
+        return min(self.every_s, EARLY_CHECKPOINT_S) if self.saves < 2 else self.every_s
 
     def __call__(self, t, y):
-        due = self.every_s > 0 and time.perf_counter() - self.last_wall >= self.every_s
+        # the starting point is no progress: a run killed before its first output starts again
+        due = self.every_s > 0 and t > self.t_start and (
+            self.saves == 0 or time.perf_counter() - self.last_wall >= self._wait_s())
         if due or self.stop_requested:
             self.save(t, y)
         if self.stop_requested:
@@ -251,6 +306,8 @@ def _shapes(snapshot, results: Path | None) -> dict | None:
 
     with h5py.File(results, "r") as f:
         snaps = f["snapshots"]
+        if "t" not in snaps:  # no output written
+            return None
         # datasets, read by the plugin as it needs them (the beam reads the control points)
         return snapshot.from_snapshots(snaps["t"][:], {k: snaps[k] for k in snaps if k != "t"})
 
@@ -331,17 +388,13 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     out_dir = Path(out_dir)
     clock0 = time.perf_counter()
     start = _start(scene, resume)
-    # guards before the first step: SceneError (nothing written yet) for a dt beyond the stable
-    # step or a spurious growing mode at rest
-    guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
-    warnings = list(warnings) + _output_warnings(scene, start)
-    for w in warnings:
-        print(f"warning: {w}", file=sys.stderr)
+    guard_facts, warnings = _checks(scene, start, out_dir)
     if claim is not None:
         claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     outs = _outputs(scene, start, out_dir, resume)
     summary = _summary_head(scene, start, resume, guard_facts, warnings)
+    outs.ckpt.after_save.append(_running_summary(out_dir / "summary.json", summary, start.stats, outs.ckpt.t_saved))
     compile_s = warm_up(start.sim.problem, start.tab, start.t0, start.y0, start.dt)
     if compile_s > 2.0 and not quiet:
         print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
@@ -353,16 +406,38 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         summary["wall_time_s"] = loop_s
     summary["timing"] = _timing(compile_s, t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
-    # the summary is complete before the plots: a slow or killed plot loses nothing computed
-    write_json(out_dir / "summary.json", summary)
-    if scene.output.plots:
-        _plots(scene, start, outs, out_dir, summary)
-    if end.error is not None:
-        exc = RunError(end.error + f" (outputs up to t={outs.ckpt.t_saved if end.status == 'interrupted' else end.t:.6g}"
-                       f" are in {out_dir})")
+    _finish(scene, start, outs, end, out_dir, summary)
+    return RunResult(out_dir, summary, outs.history)
+
+
+def _finish(scene: Scene, start: "_Start", outs: "_Outputs", end: "_End", out_dir: Path, summary: dict) -> None:
+    """Write the summary (complete before the plots: a slow or killed plot loses nothing
+    computed), then the plots unless a write failed; raise :class:`RunError` for a run that
+    stopped early or whose summary cannot be written."""
+    error = end.error
+    try:
+        write_json(out_dir / "summary.json", summary)
+        if scene.output.plots and not end.write_failed:
+            _plots(scene, start, outs, out_dir, summary)
+    except WRITE_ERRORS as exc:
+        error = error or f"{scene.name}: {_write_error(exc, out_dir / 'summary.json')}"
+    if error is not None:
+        upto = outs.ckpt.t_saved if end.status == "interrupted" else end.t
+        exc = RunError(error + ("" if end.write_failed else f" (outputs up to t={upto:.6g} are in {out_dir})"))
         exc.interrupted = end.status == "interrupted"
         raise exc
-    return RunResult(out_dir, summary, outs.history)
+
+
+def _checks(scene: Scene, start: "_Start", out_dir: Path) -> tuple[dict, list]:
+    """Refusals before anything is written (SceneError): the outputs' count, memory and disk
+    first (cheap), then the guards (a dt beyond the stable step, a spurious growing mode at
+    rest). Returns the guards' facts and the warnings, printed on stderr."""
+    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir)
+    guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
+    warnings = list(warnings) + _output_warnings(scene, start)
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    return guard_facts, warnings
 
 
 def _timing(compile_s: float, setup_s: float, loop_s: float, output_s: float) -> dict:
@@ -475,6 +550,8 @@ def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) ->
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": scene.integrator.method,
             "dt": start.dt, "energy0": e0}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, start.stats)
+    ckpt.t_saved = t0 if resume is not None else None  # a resumed run starts from its checkpoint
+    ckpt.t_start = t0
     if h5 is not None:
         ckpt.flushers.append(h5.flush)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
@@ -526,6 +603,19 @@ def _summary_head(scene: Scene, start: _Start, resume, guard_facts: dict, warnin
     }
 
 
+def _running_summary(path: Path, head: dict, stats: Stats, t_checkpoint: float | None):
+    """Writes summary.json of a run under way (``status = "running"``, the counters and the
+    time of the last checkpoint, ``None`` before the first), now and as
+    ``write(t_checkpoint)`` after each checkpoint."""
+
+    def write(t_checkpoint: float | None) -> None:
+        write_json(path, head | {"status": "running", "checkpoint_t": t_checkpoint, "t_reached": t_checkpoint}
+                   | stats.as_dict())
+
+    write(t_checkpoint)
+    return write
+
+
 @dataclass
 class _End:
     """How the integration ended: ``status`` "ok", "interrupted" or "failed", the time
@@ -536,33 +626,29 @@ class _End:
     y: object
     stats: Stats
     error: str | None
+    write_failed: bool = False
 
 
 def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet: bool, resumed: bool) -> _End:
     """The time loop with the observers at output times; progress at output times only (no
     per-step monitor, so a compiled problem runs the steps between two outputs in one call
-    of the engine). Failures are caught, diagnosed and returned, with the files closed."""
-    spec, t0, y0, stats = scene.integrator, start.t0, start.y0, start.stats
-    t_out = output_times(scene.t_end, start.every)
-    t_out = t_out[t_out > t0 + 1e-9 * start.every]
+    of the engine). Failures, a failing write among them, are caught, diagnosed and
+    returned, with the files closed."""
+    t0, y0, stats = start.t0, start.y0, start.stats
     progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
     observer = _observer(outs, progress, stats, skip_first=resumed)
     old_handlers = _install_signal_handlers(outs.ckpt)
     end = _End("ok", t0, y0, stats, None)
     try:
-        if start.dt is not None:
-            t, y, stats = integrate_fixed(start.sim.problem, start.tab, (t0, t_out[-1]), y0, start.dt, observer,
-                                          t_out, stats=stats)
-        else:
-            t, y, stats = integrate_adaptive(start.sim.problem, start.tab, (t0, t_out[-1]), y0, spec.rtol or 1e-6,
-                                             spec.atol or 1e-9, observer, t_out,
-                                             h_max=start.sim.info.get("dt_auto", np.inf), stats=stats)
+        t, y, stats = _loop(scene, start, observer)
         outs.ckpt.save(t, y)
         end = _End("ok", t, y, stats, None)
     except Interrupted as exc:
         end = _End("interrupted", exc.t, y0, stats,
                    f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "
                    f"--resume {out_dir}")
+    except WriteFailed as exc:
+        end = _End("failed", exc.t, y0, stats, _write_failed(scene, exc, outs.ckpt.t_saved, out_dir), True)
     except IntegrationError as exc:
         error = f"{scene.name}: {exc}"
         cause = diagnose(scene, start.sim, start.tab, start.dt, outs.last["t"], outs.last["y"])
@@ -570,11 +656,48 @@ def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet
     finally:
         for sig, h in old_handlers.items():
             signal.signal(sig, h)
-        outs.writer.close()
-        if outs.h5 is not None:
-            outs.h5.close()
+        closing = _close_writers(outs)
         progress.close(end.t)
+    if closing is not None and end.error is None:  # the last block of a file could not be written
+        end = _End("failed", end.t, end.y, end.stats,
+                   _write_failed(scene, WriteFailed(closing, end.t, end.stats.steps), outs.ckpt.t_saved, out_dir), True)
     return end
+
+
+def _loop(scene: Scene, start: _Start, observer):
+    """``(t, y, stats)`` at t_end: the fixed-step or adaptive integration from the start."""
+    spec, t0 = scene.integrator, start.t0
+    t_out = output_times(scene.t_end, start.every)
+    t_out = t_out[t_out > t0 + 1e-9 * start.every]
+    if start.dt is not None:
+        return integrate_fixed(start.sim.problem, start.tab, (t0, t_out[-1]), start.y0, start.dt, observer, t_out,
+                               stats=start.stats)
+    return integrate_adaptive(start.sim.problem, start.tab, (t0, t_out[-1]), start.y0, spec.rtol or 1e-6,
+                              spec.atol or 1e-9, observer, t_out, h_max=start.sim.info.get("dt_auto", np.inf),
+                              stats=start.stats)
+
+
+def _write_failed(scene: Scene, exc: WriteFailed, t_checkpoint: float | None, out_dir: Path) -> str:
+    """One line: the file and the error, and what the directory keeps to go on from."""
+    keep = (f"the checkpoint at t={t_checkpoint:.6g} is kept: free space, then `liegroup-int run --resume {out_dir}`"
+            if t_checkpoint is not None else
+            f"no checkpoint yet: free space, then `liegroup-int run {scene.source.removeprefix('builtin:')} "
+            f"--out {out_dir} --overwrite`")
+    return f"{scene.name}: {exc} at t={exc.t:.6g}; {keep}"
+
+
+def _close_writers(outs: _Outputs) -> str | None:
+    """Close the history and HDF5 writers (writing what they buffer); ``None``, or the
+    first failing write as ``cannot write FILE: ERROR``."""
+    failed = None
+    for w in (outs.writer, outs.h5):
+        if w is None:
+            continue
+        try:
+            w.close()
+        except CLOSE_ERRORS as exc:
+            failed = failed or _write_error(exc, w.path)
+    return failed
 
 
 def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool):
@@ -588,15 +711,27 @@ def _observer(outs: _Outputs, progress: Progress, stats: Stats, skip_first: bool
             return
         c = time.perf_counter()
         for obs in outs.observers:
-            obs(t, y)
+            try:
+                obs(t, y)
+            except WRITE_ERRORS as exc:
+                raise WriteFailed(_write_error(exc, _file_of(obs)), t, stats.steps) from None
         progress(t, y, stats)
         outs.output_s[0] += time.perf_counter() - c
 
     return observer
 
 
+def _file_of(observer) -> str:
+    """The file an output observer writes (for a failing write's message)."""
+    for attr in ("path", "pvd"):
+        if getattr(observer, attr, None) is not None:
+            return str(getattr(observer, attr))
+    return "the outputs"
+
+
 def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dict:
-    tail = {"status": end.status, "t_reached": end.t, "history_rows": outs.writer.rows}
+    tail = {"status": end.status, "t_reached": end.t, "checkpoint_t": outs.ckpt.t_saved,
+            "history_rows": outs.writer.rows}
     if outs.balance is not None:
         b = outs.balance
         tail["energy_balance"] = {"defect": b.defect, "worst_fraction": b.worst, "energy_scale": b.scale,
@@ -629,6 +764,46 @@ RESUME_KEYS = ("t_end", "output.plots", "output.paraview", "output.checkpoint_ev
                "guard.energy_balance")
 
 
+#: Files whose presence means a directory holds a run.
+RUN_FILES = ("summary.json", "history.csv", "results.h5", "checkpoint.npz")
+
+
+def _checkpoint_time(path: Path) -> float | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return float(z["t"])
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def run_dir_advice(out_dir: Path, scene: str | None = None) -> str | None:
+    """What ``out_dir`` holds and what to do with it, in one line (the refusal of a new run
+    into it and of a resume without checkpoint give the same); ``None`` when it holds no run.
+
+    Parameters
+    ----------
+    out_dir : Path
+    scene : str, optional
+        The scene to name in the command when summary.json does not (killed early).
+    """
+    out_dir = Path(out_dir)
+    if not any((out_dir / f).exists() for f in RUN_FILES):
+        return None
+    try:
+        summary = json.loads((out_dir / "summary.json").read_text())
+    except (OSError, ValueError):
+        summary = {}
+    source = str(summary.get("source") or scene or "SCENE").removeprefix("builtin:")
+    status = summary.get("status", "no summary")
+    t = _checkpoint_time(out_dir / "checkpoint.npz") if (out_dir / "checkpoint.npz").exists() else None
+    if t is not None:
+        return (f"{out_dir}: holds a run of {source} ({status}; checkpoint at t={t:.6g} s); continue it with "
+                f"`liegroup-int run --resume {out_dir}` (--set t_end=T to extend it), replace it with --overwrite, "
+                f"or give --out another directory")
+    return (f"{out_dir}: holds a run of {source} ({status}) without a checkpoint, so it cannot be resumed; start it "
+            f"again with `liegroup-int run {source} --out {out_dir} --overwrite`, or give --out another directory")
+
+
 def resume_run(out_dir: Path, overrides: dict, quiet: bool = True, scene: str | None = None) -> RunResult:
     """Continue the run stored in ``out_dir`` from its checkpoint (``--resume DIR``).
 
@@ -637,7 +812,7 @@ def resume_run(out_dir: Path, overrides: dict, quiet: bool = True, scene: str | 
     :class:`SceneError` before anything is written."""
     path = Path(out_dir) / "checkpoint.npz"
     if not path.exists():
-        raise SceneError(f"{out_dir}: no checkpoint.npz to resume from")
+        raise SceneError(run_dir_advice(out_dir, scene) or f"{out_dir}: holds no run to resume (no checkpoint.npz)")
     ckpt = read_checkpoint(path)
     meta = ckpt["meta"]
     keys = dict(meta["scene_keys"])

@@ -11,7 +11,8 @@ Typical use::
 
     grid = expand_grid({"integrator.dt": [0.02, 0.01, 0.005, 0.0025]})
     rows = run_study("heavy_top", {"t_end": 1.0}, grid, "runs/study")
-    table = convergence_table(rows, "integrator.dt", quantity="auto")
+    table = convergence_table(rows, "integrator.dt", quantity="auto")  # coarse to fine
+    fit = fit_table(table)  # rate with its spread, or ValueError naming what breaks it
     write_study("runs/study", rows, table)
 
 Parallel runs use ``dask.distributed`` (``pip install "dask[distributed]"``): a local
@@ -31,7 +32,7 @@ import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
@@ -452,6 +453,42 @@ def quantity_vector(row: Mapping, quantity: str) -> np.ndarray:
     return np.concatenate(parts)
 
 
+#: The last part of a varied key -> +1 when larger values are finer (more control points,
+#: higher degree), -1 when smaller values are (time step, tolerances).
+FINER = {"n_ctrl": 1, "degree": 1, "dt": -1, "rtol": -1, "atol": -1}
+
+
+def finer_direction(param: str, finer: str | None = None) -> int:
+    """+1 when larger values of ``param`` are finer, -1 when smaller values are.
+
+    Parameters
+    ----------
+    param : str
+        The varied key, e.g. ``"integrator.dt"`` (-1) or ``"space.n_ctrl"`` (+1).
+    finer : {"larger", "smaller"}, optional
+        States the direction for a key not in :data:`FINER` (and overrides it).
+
+    Raises
+    ------
+    ValueError
+        An unknown key without ``finer``, or a bad ``finer``.
+    """
+    if finer is not None:
+        if finer not in ("larger", "smaller"):
+            raise ValueError(f"finer: expected 'larger' or 'smaller', got {finer!r}")
+        return 1 if finer == "larger" else -1
+    last = param.rsplit(".", 1)[-1]
+    if last not in FINER:
+        raise ValueError(f"{param}: cannot tell whether larger or smaller values are finer; state it with "
+                         f"--finer larger|smaller (known keys end in {', '.join(FINER)})")
+    return FINER[last]
+
+
+def coarse_to_fine(rows: Sequence[Mapping], param: str, direction: int) -> list[Mapping]:
+    """Rows sorted from the coarsest to the finest ``param`` value (stable for ties)."""
+    return sorted(rows, key=lambda r: direction * _param_value(r, param))
+
+
 def _param_value(row: Mapping, param: str) -> float:
     value = (row.get("overrides") or {}).get(param)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -460,20 +497,20 @@ def _param_value(row: Mapping, param: str) -> float:
     return float(value)
 
 
-def _pick_reference(rows: Sequence[Mapping], param: str, reference: str) -> Mapping:
+def _pick_finest(rows: Sequence[Mapping], param: str, direction: int) -> Mapping:
     ok = [r for r in rows if r.get("status") == "ok"]
     if not ok:
         raise ValueError("no successful run to use as the reference")
-    values = [_param_value(r, param) for r in ok]
-    best = min(values) if reference in ("finest", "smallest") else max(values)
-    if values.count(best) > 1:
+    ordered = coarse_to_fine(ok, param, direction)
+    best = _param_value(ordered[-1], param)
+    if sum(_param_value(r, param) == best for r in ok) > 1:
         raise ValueError(f"several runs have {param} = {best!r}; select one study line (or pass a reference row)")
-    return ok[values.index(best)]
+    return ordered[-1]
 
 
 def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapping = "finest",
-                      quantity: str = "auto") -> list[dict]:
-    """Error of each run's final ``quantity`` against a reference run.
+                      quantity: str = "auto", finer: str | None = None) -> list[dict]:
+    """Error of each run's final ``quantity`` against a reference run, coarse to fine.
 
     Parameters
     ----------
@@ -481,57 +518,62 @@ def convergence_table(rows: Sequence[Mapping], param: str, reference: str | Mapp
         Study rows (:func:`run_study`); ``param`` must be one of their overrides.
     param : str
         The varied key, e.g. ``"integrator.dt"``.
-    reference : {"finest", "smallest", "largest"} or dict
-        ``"finest"`` (= ``"smallest"``): the successful run with the smallest ``param``
-        (dt-like parameters); ``"largest"``: the largest (``space.n_ctrl``-like); or an
+    reference : "finest" or dict
+        ``"finest"``: the successful run with the finest ``param`` value (the smallest
+        ``integrator.dt``, the largest ``space.n_ctrl``: :func:`finer_direction`); or an
         explicit reference row (e.g. from a separate, finer run).
     quantity : str
         Final-state field(s) compared (see :func:`quantity_vector`); ``"auto"`` picks
         :func:`default_quantity` of the reference.
+    finer : {"larger", "smaller"}, optional
+        Which values of ``param`` are finer, for keys :func:`finer_direction` does not know.
 
     Returns
     -------
     list of dict
-        One entry per run except the reference, in row order: ``run, param, value,
-        quantity, status, error (Euclidean norm of the difference; None if the run
-        failed), rel_error (error / |reference|), wall_time_s, steps, rhs_evals,
+        One entry per run except the reference, from the coarsest to the finest value:
+        ``run, param, value, finer, quantity, status, error (Euclidean norm of the
+        difference; None if the run failed), rel_error (error / |reference|), round_off
+        (rel_error within :func:`round_off_floor`), wall_time_s, steps, rhs_evals,
         reference_run``.
 
     Raises
     ------
     ValueError
-        No usable reference, non-numeric ``param`` values, an unknown quantity.
+        No usable reference, non-numeric ``param`` values, an unknown quantity or direction.
     """
+    direction = finer_direction(param, finer)
     if isinstance(reference, str):
-        if reference not in ("finest", "smallest", "largest"):
-            raise ValueError(f"reference: expected 'finest', 'smallest', 'largest' or a row, got {reference!r}")
-        ref = _pick_reference(rows, param, reference)
+        if reference != "finest":
+            raise ValueError(f"reference: expected 'finest' or a row, got {reference!r}")
+        ref = _pick_finest(rows, param, direction)
     else:
         ref = reference
         if ref.get("status") != "ok":
             raise ValueError(f"reference row (run {ref.get('run')}) did not succeed")
     if quantity == "auto":
         quantity = default_quantity(ref)
+    finer = "larger" if direction > 0 else "smaller"
+    return [_entry(row, ref, param, finer, quantity) for row in coarse_to_fine(rows, param, direction) if row is not ref]
+
+
+def _entry(row: Mapping, ref: Mapping, param: str, finer: str, quantity: str) -> dict:
+    """One convergence-table entry: ``row``'s error in ``quantity`` against ``ref``."""
     q_ref = quantity_vector(ref, quantity)
     scale = float(np.linalg.norm(q_ref))
-    table = []
-    for row in rows:
-        if row is ref:
-            continue
-        err = None
-        if row.get("status") == "ok":
-            err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
-        rel = None if err is None or scale == 0.0 else err / scale
-        table.append({"run": row.get("run"), "param": param, "value": _param_value(row, param), "quantity": quantity,
-                      "status": row.get("status"), "error": err, "rel_error": rel,
-                      "round_off": rel is not None and rel <= round_off_floor(row.get("steps"), ref.get("steps")),
-                      "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"),
-                      "rhs_evals": row.get("rhs_evals"), "reference_run": ref.get("run")})
-    return table
+    err = None
+    if row.get("status") == "ok":
+        err = float(np.linalg.norm(quantity_vector(row, quantity) - q_ref))
+    rel = None if err is None or scale == 0.0 else err / scale
+    return {"run": row.get("run"), "param": param, "value": row["overrides"][param], "finer": finer,
+            "quantity": quantity, "status": row.get("status"), "error": err, "rel_error": rel,
+            "round_off": rel is not None and rel <= round_off_floor(row.get("steps"), ref.get("steps")),
+            "wall_time_s": row.get("wall_time_s"), "steps": row.get("steps"), "rhs_evals": row.get("rhs_evals"),
+            "reference_run": ref.get("run")}
 
 
 #: A relative error within this factor of the accumulated rounding of a run is not a
-#: discretization error (issue: a rate fitted through such points means nothing).
+#: discretization error: a rate fitted through such points means nothing.
 ROUND_OFF_FACTOR = 100.0
 
 
@@ -543,13 +585,26 @@ def round_off_floor(steps, ref_steps) -> float:
     return ROUND_OFF_FACTOR * float(np.finfo(float).eps) * math.sqrt(max(n, 1.0))
 
 
+def _checked_points(xs: Sequence[float], errs: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+    x, e = np.asarray(xs, dtype=float), np.asarray(errs, dtype=float)
+    if x.ndim != 1 or x.shape != e.shape:
+        raise ValueError(f"xs and errs: expected two 1-d arrays of the same length, got {x.shape} and {e.shape}")
+    if x.size < 3:
+        raise ValueError(f"fit_rate: expected at least 3 points, got {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(e)) and np.all(x > 0) and np.all(e > 0)):
+        raise ValueError("fit_rate: expected finite, positive parameter values and errors")
+    if np.unique(x).size != x.size:
+        raise ValueError("fit_rate: parameter values repeat")
+    return x, e
+
+
 def fit_rate(xs: Sequence[float], errs: Sequence[float]) -> float:
     """Least-squares slope of ``log(err)`` against ``log(x)`` (the observed order).
 
     Parameters
     ----------
     xs : sequence of float, shape (k,)
-        Positive parameter values (at least two distinct).
+        Positive, distinct parameter values.
     errs : sequence of float, shape (k,)
         Positive errors.
 
@@ -560,36 +615,102 @@ def fit_rate(xs: Sequence[float], errs: Sequence[float]) -> float:
     Raises
     ------
     ValueError
-        Fewer than 3 points, non-positive or non-finite values, or all ``xs`` equal.
+        Fewer than 3 points, non-positive or non-finite values, or repeated ``xs``.
     """
-    x, e = np.asarray(xs, dtype=float), np.asarray(errs, dtype=float)
-    if x.ndim != 1 or x.shape != e.shape:
-        raise ValueError(f"xs and errs: expected two 1-d arrays of the same length, got {x.shape} and {e.shape}")
-    if x.size < 3:
-        raise ValueError(f"fit_rate: expected at least 3 points, got {x.size}")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(e)) and np.all(x > 0) and np.all(e > 0)):
-        raise ValueError("fit_rate: expected finite, positive parameter values and errors")
-    if np.all(x == x[0]):
-        raise ValueError("fit_rate: all parameter values are equal")
+    x, e = _checked_points(xs, errs)
     return float(np.polyfit(np.log(x), np.log(e), 1)[0])
 
 
-def table_rate(table: Sequence[Mapping]) -> float:
-    """:func:`fit_rate` over a convergence table's entries with a positive error.
+class RateFit(NamedTuple):
+    """An observed order with its spread.
+
+    Attributes
+    ----------
+    rate : float
+        Least-squares slope ``p`` of ``log(err)`` against ``log(h)``, ``h`` = the value
+        (smaller is finer) or its inverse (larger is finer): ``err ~ h^p``.
+    stderr : float
+        Standard error of that slope (0 for a perfect line; ``k - 2`` degrees of freedom).
+    local_min, local_max : float
+        The smallest and largest slope between neighbouring points.
+    values : tuple
+        The parameter values fitted, coarse to fine.
+    """
+
+    rate: float
+    stderr: float
+    local_min: float
+    local_max: float
+    values: tuple
+
+
+def fit_rate_spread(hs: Sequence[float], errs: Sequence[float]) -> tuple[float, float, float, float]:
+    """``(slope, standard error of the slope, min and max local slope)`` of ``log(err)``
+    against ``log(h)``, for the points of :func:`fit_rate`."""
+    h, e = _checked_points(hs, errs)
+    lx, le = np.log(h), np.log(e)
+    slope, icpt = np.polyfit(lx, le, 1)
+    resid = le - (slope * lx + icpt)
+    stderr = math.sqrt(float(resid @ resid) / (lx.size - 2) / float(((lx - lx.mean()) ** 2).sum()))
+    local = np.diff(le) / np.diff(lx)
+    return float(slope), stderr, float(local.min()), float(local.max())
+
+
+def _fit_break(table: Sequence[Mapping]) -> tuple[list[Mapping], str | None]:
+    """The entries a rate may be fitted over (coarse to fine, above the round-off floor, each
+    error below the previous one), or a one-line reason naming the values that break it."""
+    param = table[0]["param"] if table else "?"
+    used = [t for t in table if t.get("error") is not None]
+    floor = [t for t in used if t.get("round_off") or t["error"] == 0]
+    above = [t for t in used if t not in floor]
+    if floor and above and above[-1]["run"] != used[len(above) - 1]["run"]:
+        t = floor[0]
+        return [], (f"{param} = {t['value']!r} is within {ROUND_OFF_FACTOR:g}x of the round-off floor but finer "
+                    f"values are not; the errors are not discretization errors")
+    for a, b in zip(above, above[1:]):
+        if not b["error"] < a["error"]:
+            return [], (f"errors do not shrink from coarse to fine: {param} = {b['value']!r} gives {b['error']:.2e}, "
+                        f"not below {a['error']:.2e} at {a['value']!r} (not in the asymptotic range: another error "
+                        f"source dominates, or the values are too coarse)")
+    if len(above) < 3 and floor:
+        return [], (f"{len(floor)} of {len(table)} errors are within {ROUND_OFF_FACTOR:g}x of the round-off floor "
+                    f"(relative {min(t['rel_error'] or 0.0 for t in floor):.1e}) at {param} = "
+                    f"{', '.join(repr(t['value']) for t in floor)}; use coarser values or a longer span")
+    if len(above) < 3:
+        return [], f"{len(above)} usable errors; a rate needs at least 3 (give more values)"
+    return above, None
+
+
+def fit_table(table: Sequence[Mapping]) -> RateFit:
+    """The observed order of a convergence table (:func:`convergence_table`), with spread.
+
+    Only entries whose errors sit above the round-off floor and shrink strictly from the
+    coarsest to the finest value are fitted, and only when there are at least 3.
 
     Raises
     ------
     ValueError
-        Fewer than 3 such entries; entries flagged ``round_off`` (:func:`round_off_floor`)
-        are not used, and when they leave fewer than 3 the message says so.
+        One line naming the values that prevent a fit.
     """
-    used = [t for t in table if t.get("error") is not None and t["error"] > 0 and not t.get("round_off")]
-    flagged = [t for t in table if t.get("round_off")]
-    if len(used) < 3 and flagged:
-        raise ValueError(f"{len(flagged)} of {len(table)} errors are within {ROUND_OFF_FACTOR:g}x of the round-off "
-                         f"floor (relative {min(t['rel_error'] for t in flagged):.1e}); use coarser values or a "
-                         f"longer span")
-    return fit_rate([t["value"] for t in used], [t["error"] for t in used])
+    used, reason = _fit_break(table)
+    if reason is not None:
+        raise ValueError(reason)
+    sign = 1.0 if used[0].get("finer", "smaller") == "smaller" else -1.0
+    hs = [float(t["value"]) ** sign for t in used]
+    rate, stderr, lo, hi = fit_rate_spread(hs, [t["error"] for t in used])
+    return RateFit(rate, stderr, lo, hi, tuple(t["value"] for t in used))
+
+
+def table_rate(table: Sequence[Mapping]) -> float:
+    """:attr:`RateFit.rate` of :func:`fit_table`."""
+    return fit_table(table).rate
+
+
+def format_fit(fit: RateFit, param: str, finer: str) -> str:
+    """One line: the rate, its standard error, the local slopes and what was fitted."""
+    h = param if finer == "smaller" else f"1/{param}"
+    return (f"fitted rate: {fit.rate:.3f} +- {fit.stderr:.2g} (standard error of the log-log slope over "
+            f"{len(fit.values)} runs; local slopes {fit.local_min:.2f} to {fit.local_max:.2f}; error ~ ({h})^rate)")
 
 
 # ---------------------------------------------------------------------- output
@@ -653,13 +774,16 @@ def plot_convergence(table: Sequence[Mapping], path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(6, 4.5))
     ax.loglog(x, e, "o-", label=f"error in {used[0]['quantity']}")
     try:
-        rate = fit_rate(x, e)
+        fit = fit_table(table)
     except ValueError:
-        rate = None
-    if rate is not None:
-        c = np.polyfit(np.log(x), np.log(e), 1)[1]
-        xf = np.array([x.min(), x.max()])
-        ax.loglog(xf, np.exp(c) * xf**rate, "k--", label=f"fitted slope {rate:.2f}")
+        fit = None
+    if fit is not None:
+        xv = np.array(fit.values, dtype=float)
+        ev = np.array([t["error"] for t in used if t["value"] in fit.values])
+        slope = fit.rate if used[0].get("finer", "smaller") == "smaller" else -fit.rate
+        c = np.polyfit(np.log(xv), np.log(ev), 1)[1]
+        xf = np.array([xv.min(), xv.max()])
+        ax.loglog(xf, np.exp(c) * xf**slope, "k--", label=f"fitted rate {fit.rate:.2f} +- {fit.stderr:.2g}")
     ax.set_xlabel(used[0]["param"])
     ax.set_ylabel(f"|error| (reference: run {used[0]['reference_run']})")
     ax.grid(True, which="both", alpha=0.3)
@@ -699,8 +823,9 @@ def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Ma
 
     Files: ``study.csv`` (one line per run: run, override keys, status, steps,
     rhs_evals, wall_time_s, t_reached, flattened ``final.*`` fields, error, run_dir) and
-    ``study.json`` (``{"rows", "convergence", "rate", "timing"}``; ``timing`` from
-    :func:`time_split`). With a ``table`` also
+    ``study.json`` (``{"rows", "convergence", "rate", "rate_fit", "no_rate", "timing"}``:
+    ``rate_fit`` is :class:`RateFit` as a dict, ``no_rate`` the reason when no rate was
+    fitted, ``timing`` from :func:`time_split`). With a ``table`` also
     ``convergence.csv``, ``convergence.png`` (error vs parameter, log-log, fitted slope
     in the legend when >= 3 positive errors) and ``work_precision.png`` (error vs wall
     time), the PNGs only when some error is positive.
@@ -724,14 +849,15 @@ def write_study(out_dir: str | Path, rows: Sequence[Mapping], table: Sequence[Ma
     out_dir.mkdir(parents=True, exist_ok=True)
     header, records = _csv_rows(rows)
     written = [_write_csv(out_dir / "study.csv", header, records)]
-    rate = None
+    fit, no_rate = None, None
     if table:
         try:
-            rate = table_rate(table)
-        except ValueError:
-            rate = None
+            fit = fit_table(table)
+        except ValueError as exc:
+            no_rate = str(exc)
     convergence = _plain(list(table)) if table is not None else None
-    doc = {"rows": _plain(list(rows)), "convergence": convergence, "rate": rate,
+    doc = {"rows": _plain(list(rows)), "convergence": convergence, "rate": None if fit is None else fit.rate,
+           "rate_fit": None if fit is None else _plain(fit._asdict()), "no_rate": no_rate,
            "timing": _plain(dict(timing)) if timing is not None else None}
     (out_dir / "study.json").write_text(json.dumps(doc, indent=2) + "\n")
     written.append(out_dir / "study.json")

@@ -102,8 +102,8 @@ def test_explicit_reference_and_quantities(serial_rows):
     ref = rows[-1]
     table = convergence_table(rows[:-1], "integrator.dt", reference=ref, quantity="omega_body")
     assert len(table) == 3 and all(t["reference_run"] == 3 for t in table)
-    largest = convergence_table(rows, "integrator.dt", reference="largest", quantity="R")
-    assert [t["value"] for t in largest] == DTS[1:]
+    with pytest.raises(ValueError, match="'finest' or a row"):
+        convergence_table(rows, "integrator.dt", reference="largest", quantity="R")  # never the coarsest
     assert default_quantity(rows[0]) == "R+omega_body"
     assert quantity_vector(rows[0], "R+omega_body").shape == (12,)
     with pytest.raises(ValueError, match="tip"):
@@ -125,7 +125,8 @@ def test_write_study(serial_rows, tmp_path):
     assert float(recs[0]["final.omega_body.2"]) == rows[0]["final"]["omega_body"][2]
     doc = json.loads((tmp_path / "study.json").read_text())
     assert doc["rows"] == rows and len(doc["convergence"]) == 3
-    assert math.isclose(doc["rate"], table_rate(table))
+    assert math.isclose(doc["rate"], table_rate(table)) and doc["no_rate"] is None
+    assert doc["rate_fit"]["values"] == DTS[:-1] and doc["rate_fit"]["stderr"] > 0
     assert (tmp_path / "convergence.png").stat().st_size > 1000
     assert {p.name for p in write_study(tmp_path / "plain", rows)} == {"study.csv", "study.json"}
 
@@ -182,6 +183,6 @@ def test_fit_rate():
     x = np.array([0.1, 0.05, 0.025, 0.0125])
     assert math.isclose(fit_rate(x, 3.0 * x**2), 2.0)
     for xs, es in (([1, 2], [1, 2]), ([1, 2, 3], [1, 0, 2]), ([1, 2, 3], [1, -1, 2]), ([1, 1, 1], [1, 2, 3]),
-                   ([1, 2, np.nan], [1, 2, 3])):
+                   ([1, 2, np.nan], [1, 2, 3]), ([1, 2, 2], [1, 2, 3])):
         with pytest.raises(ValueError):
             fit_rate(xs, es)

@@ -19,8 +19,12 @@ def write_checkpoint(path: Path, t: float, state: dict, stats: dict, meta: dict)
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp.npz")
     arrays = {f"state/{k}": np.asarray(v) for k, v in state.items()}
-    np.savez(tmp, t=np.float64(t), stats=json.dumps(stats), meta=json.dumps(meta), **arrays)
-    os.replace(tmp, path)
+    try:
+        np.savez(tmp, t=np.float64(t), stats=json.dumps(stats), meta=json.dumps(meta), **arrays)
+        os.replace(tmp, path)
+    except OSError:  # the previous checkpoint stays
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def read_checkpoint(path: Path) -> dict:

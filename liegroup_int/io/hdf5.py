@@ -18,12 +18,18 @@ therefore keeps everything up to its last block: it loses at most the outputs of
 
 from __future__ import annotations
 
+import errno
 import json
+import shutil
 import time
 from pathlib import Path
 from typing import Callable, Mapping
 
 import numpy as np
+
+
+#: Bytes kept free beyond a block's own on the disk of results.h5 (HDF5 metadata).
+HEADROOM = 2**20
 
 
 class Hdf5Writer:
@@ -86,9 +92,25 @@ class Hdf5Writer:
         d.resize(n + block.shape[0], axis=0)
         d[n:] = block
 
+    def _check_room(self) -> None:
+        """Raise ``OSError(ENOSPC)`` naming the file when its disk cannot take the pending
+        block (its values, a chunk per dataset and :data:`HEADROOM`): HDF5 itself does not
+        survive a full disk (a failed write leaves the file's cache in a state where the
+        next flush crashes the interpreter), so the block is not handed to it."""
+        need = HEADROOM
+        for (group, name), values in self._pending.items():
+            row = np.asarray(values[0]).nbytes or 8
+            need += row * len(values) + row * max(1, min(256, 2**20 // row))
+        free = shutil.disk_usage(self.path.parent).free
+        if free < need:
+            raise OSError(errno.ENOSPC, f"No space left on device ({free} bytes free, {need} needed for the next "
+                          f"block)", str(self.path))
+
     def flush(self) -> None:
-        """Write the buffered outputs and flush the file."""
+        """Write the buffered outputs and flush the file; ``OSError(ENOSPC)`` before any
+        write when the disk cannot take them (the file then keeps its earlier blocks)."""
         if self._n_pending:
+            self._check_room()
             for (group, name), values in self._pending.items():
                 self._write(group, name, values)
             self._pending, self._n_pending = {}, 0
@@ -121,9 +143,14 @@ class Hdf5Writer:
         self.f.flush()
 
     def close(self) -> None:
-        """Write what is buffered and close the file."""
-        self.flush()
-        self.f.close()
+        """Write what is buffered and close the file. When the buffer cannot be written
+        (``OSError``), the file is closed without it and the error raised."""
+        try:
+            self.flush()
+        finally:
+            self._pending, self._n_pending = {}, 0
+            if self.f.id.valid:
+                self.f.close()
 
 
 def read_results(path: Path) -> dict:

@@ -29,11 +29,16 @@ FRAME_NAMES = ("d1", "d2", "d3")
 
 # ---------------------------------------------------------------------- low level
 def _atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` through a temporary file and rename it onto ``path``."""
+    """Write ``text`` through a temporary file and rename it onto ``path`` (a failed write
+    removes the temporary file and leaves ``path`` as it was)."""
     tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def _ascii_values(a: np.ndarray) -> str:

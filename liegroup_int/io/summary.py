@@ -8,13 +8,18 @@ from pathlib import Path
 
 
 def write_json(path: Path, data: dict) -> None:
-    """Write JSON through a temporary file and rename, so a reader never sees half a file."""
+    """Write JSON through a temporary file and rename, so a reader never sees half a file
+    (a failed write removes the temporary file and leaves ``path`` as it was)."""
     path = Path(path)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    with open(tmp, "w") as fh:
-        json.dump(data, fh, indent=2, default=_jsonable)
-        fh.write("\n")
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w") as fh:
+            json.dump(data, fh, indent=2, default=_jsonable)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def _jsonable(obj):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -222,6 +223,46 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
 
 KINDS: dict[str, ProblemKind] = {}
 
+#: Most fixed steps a run may take: the step floor is ``t_end / MAX_STEPS`` (a billion
+#: steps is about 20 minutes of a rigid body and far longer for a beam).
+MAX_STEPS = 10**9
+#: Most output times a run may record (history rows, HDF5 snapshots, VTU files).
+MAX_OUTPUTS = 10**6
+
+
+def check_counts(source: str, span: float, dt: float | None, every: float, given_every: float | None = None) -> None:
+    """Refuse a fixed step below the floor ``span / MAX_STEPS`` and an output interval
+    giving more than ``MAX_OUTPUTS`` outputs over ``span`` (the run's remaining time).
+
+    Parameters
+    ----------
+    source : str
+        For the message.
+    span : float
+        Simulated time to run [s].
+    dt : float or None
+        Fixed step (None: adaptive).
+    every : float
+        Output interval [s] (with a fixed step, a whole number of steps).
+    given_every : float, optional
+        The scene's ``output.every`` (None: the default ``t_end / 200``), for the message.
+
+    Raises
+    ------
+    SceneError
+        One line naming the key, the limit and the remedy.
+    """
+    if dt is not None and span / dt > MAX_STEPS:
+        raise SceneError(f"{source}: key 'integrator.dt' = {dt!r}: expected >= t_end / {MAX_STEPS:.0e} = "
+                         f"{span / MAX_STEPS:.3g} s (at most {MAX_STEPS:.0e} steps; {span / dt:.3g} asked); "
+                         f"raise dt or shorten t_end")
+    if span / every > MAX_OUTPUTS:
+        shown = "t_end/200 (default)" if given_every is None else repr(given_every)
+        step = f" (whole steps of {dt:.3g} s: every {every:.3g} s)" if dt is not None and every != given_every else ""
+        least = span / MAX_OUTPUTS if dt is None else math.ceil(span / MAX_OUTPUTS / dt) * dt
+        raise SceneError(f"{source}: key 'output.every' = {shown}{step}: {span / every:.3g} outputs over {span:g} s, "
+                         f"more than {MAX_OUTPUTS:.0e}; give output.every >= {least:.3g} s or shorten t_end")
+
 
 def register_kind(kind: ProblemKind) -> ProblemKind:
     KINDS[kind.name] = kind
@@ -253,6 +294,10 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
     every = v["output.every"]
     if every is not None and every > v["t_end"]:
         raise SceneError(f"{source}: key 'output.every' = {every!r}: expected <= t_end = {v['t_end']!r}")
+    if isinstance(dt, float):
+        check_counts(source, v["t_end"], dt, max(every if every is not None else v["t_end"] / 200.0, dt), every)
+    elif every is not None:
+        check_counts(source, v["t_end"], None, every, every)
     params = {k: v[k] for k in kind.keys}
     scene = Scene(
         name=v["name"] or default_name,

@@ -173,17 +173,53 @@ def coerce(key: Key, value, where: str):
     return value
 
 
+#: Byte-order marks of encodings other than UTF-8, which a scene file cannot use.
+_OTHER_BOMS = {b"\xff\xfe\x00\x00": "UTF-32", b"\x00\x00\xfe\xff": "UTF-32", b"\xff\xfe": "UTF-16",
+               b"\xfe\xff": "UTF-16"}
+
+
+def decode_scene_text(data: bytes, path) -> str:
+    """A scene file's bytes as text: UTF-8, with or without a byte-order mark.
+
+    Raises
+    ------
+    SceneError
+        One line: a binary file (NUL bytes), another encoding's byte-order mark, or bytes
+        that are not UTF-8 (with the line and column of the first).
+    """
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    for bom, name in _OTHER_BOMS.items():
+        if data.startswith(bom):
+            raise SceneError(f"{path}: a {name} file; save the scene as UTF-8 text")
+    nul = data.find(b"\x00")
+    if nul >= 0:
+        raise SceneError(f"{path}: a binary file (NUL byte at offset {nul}), not a TOML scene")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        col = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise SceneError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at line {line}, column {col}); "
+                         f"save the scene as UTF-8") from None
+
+
 def read_toml(path: Path) -> dict:
-    """Parse a TOML file, turning syntax errors into a one-line :class:`SceneError`."""
+    """Parse a TOML file (UTF-8, a byte-order mark accepted), turning unreadable, binary,
+    wrongly encoded and invalid files into a one-line :class:`SceneError`."""
     try:
         with open(path, "rb") as fh:
-            return tomllib.load(fh)
+            data = fh.read()
     except FileNotFoundError:
         raise SceneError(f"{path}: no such scene file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: invalid TOML: {exc}") from None
+    except IsADirectoryError:
+        raise SceneError(f"{path}: a directory, not a scene file") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    try:
+        return tomllib.loads(decode_scene_text(data, path))
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: invalid TOML: {exc}") from None
 
 
 def resolve_keys(keys: Mapping[str, Key], given: Mapping[str, Any], where: str) -> dict[str, Any]:

@@ -51,7 +51,10 @@ def test_an_existing_run_is_not_mixed_with_a_new_one(tmp_path, capsys):
     args = ["run", "heavy_top", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.1"]
     assert main(args) == 0
     (out / "stale.vtu").write_text("old")
-    assert main(args) == 2 and "holds a run already; give --overwrite" in capsys.readouterr().err
+    assert main(args) == 2
+    assert capsys.readouterr().err == (f"error: {out}: holds a run of heavy_top (ok; checkpoint at t=0.1 s); continue "
+                                       f"it with `liegroup-int run --resume {out}` (--set t_end=T to extend it), "
+                                       f"replace it with --overwrite, or give --out another directory\n")
     assert (out / "stale.vtu").exists()  # refused: untouched
     assert main(args + ["--overwrite"]) == 0
     assert not (out / "stale.vtu").exists() and (out / "summary.json").exists()
@@ -108,11 +111,18 @@ def test_ctrl_c_during_a_study_keeps_the_finished_runs_and_a_rerun_continues(tmp
            "--set", "guard.spectrum=false", "--set", "output.hdf5=false",
            "--set", "output.plots=false", "--set", "output.paraview=false", "--serial", "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    first = out / "run_000" / "summary.json"
+    first = out / "run_000" / "summary.json"  # "running" from the start, "ok" once finished
+
+    def finished():
+        try:
+            return json.loads(first.read_text())["status"] == "ok"
+        except (OSError, ValueError):
+            return False
+
     t0 = time.time()
-    while not first.exists() and time.time() - t0 < 120:
+    while not finished() and time.time() - t0 < 120:
         time.sleep(0.05)
-    assert first.exists(), p.communicate()
+    assert finished(), p.communicate()
     time.sleep(0.2)  # inside the second run
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)

@@ -107,6 +107,85 @@ def test_killed_run_keeps_valid_outputs(tmp_path):
         np.testing.assert_array_equal(r["history"]["t"], h["t"][:n])
 
 
+def _wait_checkpoint(out, proc, timeout=60.0):
+    """Until summary.json names a checkpoint (it is rewritten just after each one)."""
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        try:
+            if json.loads((out / "summary.json").read_text()).get("checkpoint_t") is not None:
+                return
+        except (OSError, ValueError):
+            pass
+        if proc.poll() is not None:
+            raise AssertionError(f"run ended early: {proc.communicate()}")
+        time.sleep(0.02)
+    raise AssertionError("no checkpoint")
+
+
+def _same_run(a, b):
+    """Final checkpoints, history.csv and results.h5 of two run directories are equal, bit
+    for bit."""
+    ca, cb = _final_state(a), _final_state(b)
+    assert ca["t"] == cb["t"] and ca["stats"]["steps"] == cb["stats"]["steps"]
+    for k in ca["state"]:
+        assert np.array_equal(ca["state"][k], cb["state"][k]), k
+    ha, hb = read_history(a / "history.csv"), read_history(b / "history.csv")
+    assert ha.keys() == hb.keys() and all(np.array_equal(ha[k], hb[k]) for k in ha)
+    ra, rb = read_results(a / "results.h5"), read_results(b / "results.h5")
+    for group in ("history", "snapshots"):
+        assert all(np.array_equal(ra[group][k], rb[group][k]) for k in ra[group]), group
+
+
+def test_sigkill_after_the_first_checkpoint_resumes_bitwise(tmp_path, capsys):
+    """A run killed (SIGKILL) just after its first checkpoint (the first output time, long
+    before output.checkpoint_every = 60 s) has a summary saying "running" at that
+    checkpoint; a new run into its directory is refused with the advice to --resume, and
+    the resumed run equals an uninterrupted one bit for bit (state, history, HDF5). Both
+    span 200 s, so both use the compiled kernels (short heavy-top runs use NumPy's, which
+    round differently)."""
+    sets = ["--set", "t_end=200", "--set", "output.every=0.01", "--set", "output.plots=false"]
+    out = tmp_path / "killed"
+    p = _spawn(["run", "heavy_top", "--quiet", "--out", str(out)] + sets, tmp_path)
+    _wait_checkpoint(out, p)
+    p.send_signal(signal.SIGKILL)
+    p.communicate(timeout=30)
+    t_ck = read_checkpoint(out / "checkpoint.npz")["t"]
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "running" and s["checkpoint_t"] == t_ck and s["steps"] == round(t_ck / 1e-3)
+    assert 0 < t_ck < 200
+    assert main(["run", "heavy_top", "--quiet", "--out", str(out)] + sets) == 2
+    advice = capsys.readouterr().err
+    assert f"(running; checkpoint at t={t_ck:.6g} s); continue it with `liegroup-int run --resume {out}`" in advice
+    assert main(["run", "--quiet", "--resume", str(out)]) == 0
+    full = tmp_path / "full"
+    assert main(["run", "heavy_top", "--quiet", "--out", str(full)] + sets) == 0
+    _same_run(full, out)
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+
+
+def test_a_run_without_checkpoint_is_restarted_with_overwrite(tmp_path, capsys):
+    """output.checkpoint_every = 0: no checkpoint before the end. Killed, the directory
+    holds history rows and a "running" summary without checkpoint: --resume and a new run
+    into it give the same line, saying to start again with --overwrite, which works."""
+    out = tmp_path / "run"
+    args = ["run", "heavy_top", "--quiet", "--out", str(out), "--set", "output.checkpoint_every=0",
+            "--set", "output.every=0.01"]
+    p = _spawn(args + ["--set", "t_end=200"], tmp_path)
+    _wait_rows(out / "history.csv", 5, p)
+    p.send_signal(signal.SIGKILL)
+    p.communicate(timeout=30)
+    assert not (out / "checkpoint.npz").exists()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "running" and s["checkpoint_t"] is None
+    expected = (f"error: {out}: holds a run of heavy_top (running) without a checkpoint, so it cannot be resumed; "
+                f"start it again with `liegroup-int run heavy_top --out {out} --overwrite`, or give --out another "
+                f"directory\n")
+    assert main(["run", "--quiet", "--resume", str(out)]) == 2 and capsys.readouterr().err == expected
+    assert main(args + ["--set", "t_end=0.1"]) == 2 and capsys.readouterr().err == expected
+    assert main(args + ["--set", "t_end=0.1", "--overwrite"]) == 0
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+
+
 def test_energy_guard_stops_an_exploding_energy(tmp_path):
     from liegroup_int.integrators import BlowUpError, Stats
     from liegroup_int.io import HistoryWriter
