@@ -105,6 +105,7 @@ def integrate_fixed(
     monitor: Callable | None = None,
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
     stats: Stats | None = None,
+    on_step: Callable | None = None,
 ):
     """Integrate with constant step ``dt`` (shortened only to land on output times).
 
@@ -130,6 +131,11 @@ def integrate_fixed(
         :class:`StepSizeError` (dt too large for the rotation rate).
     stats : Stats, optional
         Counters to continue (resumed runs); a new one otherwise.
+    on_step : callable, optional
+        ``on_step(t_old, y_old, t_new, y_new, K) -> None or (t, y)`` after every accepted
+        RKMK step, with ``K`` the step's stage rates (dense output and events,
+        :class:`~.events.DenseRun`); returning ``(t, y)`` ends the run there (a terminal
+        event). It runs the generic loop (not the compiled engine).
 
     Returns
     -------
@@ -141,7 +147,9 @@ def integrate_fixed(
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
     cf = is_commutator_free(tab)  # several exponentials per stage, no dexpinv
-    stepper = stepper_for(problem, tab, monitor) if not cf else None
+    if cf and on_step is not None:
+        raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
+    stepper = stepper_for(problem, tab, monitor) if not (cf or on_step is not None) else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
@@ -162,6 +170,7 @@ def integrate_fixed(
         for i in range(n):
             t_next = stop if i == n - 1 else t_start + (i + 1) * dt
             h = t_next - t
+            y_old = y
             if cf:
                 y, u = cf_step(problem, tab, t, y, h, K, Q)
                 f_last = None
@@ -173,12 +182,16 @@ def integrate_fixed(
             angle = problem.rotation_angle(u)
             if angle > max_increment_angle:
                 raise _too_large(angle, max_increment_angle, t_next, stats.steps + 1)
-            t = t_next
+            t_old, t = t, t_next
             stats.accept(h)
             if Q is not None:
                 stats.quadrature += step_quadrature(tab, Q, h)
             if monitor is not None:
                 monitor(t, y, stats)
+            hit = on_step(t_old, y_old, t, y, K) if on_step is not None else None
+            if hit is not None:
+                stats.wall_time_s += time.perf_counter() - start
+                return hit[0], hit[1], stats
         if observer is not None:
             observer(t, y)
     stats.wall_time_s += time.perf_counter() - start
@@ -221,6 +234,7 @@ def integrate_adaptive(
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
     controller: PIController = DEFAULT_CONTROLLER,
     stats: Stats | None = None,
+    on_step: Callable | None = None,
 ):
     """Integrate with an embedded pair and PI step-size control.
 
@@ -236,6 +250,9 @@ def integrate_adaptive(
     times in one call when the problem has compiled kernels
     (:meth:`Problem.compiled_kernels`), with the same arithmetic, controller and limits.
 
+    ``on_step(t_old, y_old, t_new, y_new, K)`` is called after every accepted step as in
+    :func:`integrate_fixed` (generic loop; returning ``(t, y)`` ends the run there).
+
     Returns
     -------
     (t_end, y_end, stats)
@@ -247,7 +264,7 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    stepper = stepper_for(problem, tab, monitor)
+    stepper = stepper_for(problem, tab, monitor) if on_step is None else None
     K = _workspace(problem, tab, y0) if stepper is None else None
     Q = _quadrature_workspace(problem, tab)
     fsal = _fsal(problem, tab)
@@ -304,6 +321,7 @@ def integrate_adaptive(
             err = np.inf
         rate = rotation_rate(angle, h_try, max_increment_angle, rate)
         if err <= 1.0 and angle <= max_increment_angle:
+            t_old, y_old = t, y
             t = stop if land else t + h_try
             y = y_new
             f0 = f_last
@@ -314,6 +332,10 @@ def integrate_adaptive(
             h = rotation_cap(h, rate, max_increment_angle, gains)
             if monitor is not None:
                 monitor(t, y, stats)
+            hit = on_step(t_old, y_old, t, y, K) if on_step is not None else None
+            if hit is not None:
+                t, y = hit
+                break
             if land:
                 remember()
                 if observer is not None:
