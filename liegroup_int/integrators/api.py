@@ -32,6 +32,7 @@ def integrate(
     coordinates: str = "exp",
     dense_output: bool = False,
     events=None,
+    dense_order: int | None = None,
 ) -> Solution:
     """Integrate ``dy/dt = f(t, y) y`` on a Lie group with an explicit RKMK method.
 
@@ -77,6 +78,11 @@ def integrate(
         Brent's method to ``4 eps`` (:mod:`liegroup_int.integrators.events`) and returned in
         ``Solution.t_events`` / ``Solution.y_events``. Dense output and events run the
         generic (Python) step loop, never the compiled engine.
+    dense_order : int, optional
+        Order ``q`` of the continuous extension (local error ``O(h^(q+1))``), in
+        ``[1, p]``; default ``p - 1`` (as scipy's RK45 and DOP853). ``q = p`` makes the values
+        between steps as accurate as those at the steps, for more bootstrapped stages per
+        interpolated step (rkmk4 and rkmk45: 2, rkmk65: 4; ``p - 1`` needs 0, 0, 1).
     monitor : callable, optional
         ``monitor(t, y, stats)`` after every accepted step.
     max_increment_angle : float
@@ -116,7 +122,7 @@ def integrate(
     if dense_output or specs or (t_eval is not None and not _lands_on_outputs(problem, tab, monitor)):
         if is_commutator_free(tab):
             raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
-        run = DenseRun(problem, continuous_extension(tab), t0, y0, t_eval, recorder, dense_output, specs)
+        run = DenseRun(problem, continuous_extension(tab, dense_order), t0, y0, t_eval, recorder, dense_output, specs)
     kw = dict(monitor=monitor, max_increment_angle=max_increment_angle, on_step=run)
     obs, t_out = (None, None) if run is not None else (recorder, t_eval)
     if dt is not None:
