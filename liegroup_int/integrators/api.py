@@ -122,7 +122,8 @@ def integrate(
     if dense_output or specs or (t_eval is not None and not _lands_on_outputs(problem, tab, monitor)):
         if is_commutator_free(tab):
             raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
-        run = DenseRun(problem, continuous_extension(tab, dense_order), t0, y0, t_eval, recorder, dense_output, specs)
+        run = DenseRun(problem, continuous_extension(tab, dense_order), (t0, t_end), y0, t_eval, recorder,
+                       dense_output, specs)
     kw = dict(monitor=monitor, max_increment_angle=max_increment_angle, on_step=run)
     obs, t_out = (None, None) if run is not None else (recorder, t_eval)
     if dt is not None:
@@ -130,7 +131,7 @@ def integrate(
     else:
         t, y, stats = integrate_adaptive(problem, tab, (t0, t_end), y0, rtol if rtol is not None else 1e-6,
                                          atol if atol is not None else 1e-9, obs, t_out, **kw)
-    return _solution(recorder, run, t, y, t_end, stats, tab.name)
+    return _solution(recorder, run, t, y, stats, tab.name)
 
 
 def _problem(f, y0, space, method, coordinates):
@@ -162,13 +163,13 @@ def _lands_on_outputs(problem: Problem, tab, monitor) -> bool:
     return monitor is None and hook is not None and hook() is not None
 
 
-def _solution(recorder, run, t, y, t_end, stats, name) -> Solution:
+def _solution(recorder, run, t, y, stats, name) -> Solution:
     sol = run.finish(t, y) if run is not None else None
     if isinstance(recorder, StateRecorder):
         ts, ys = np.asarray(recorder.t), recorder.y
     else:
         ts, ys = np.asarray(getattr(recorder, "t", [])), []
     t_events, y_events = run.events.arrays() if run is not None and run.events is not None else (None, None)
-    status = 1 if t < t_end else 0
+    status = 1 if run is not None and run.stopped else 0
     return Solution(t=ts, y=ys, t_final=t, y_final=y, stats=stats, method=name, observer=recorder, sol=sol,
                     t_events=t_events, y_events=y_events, status=status)

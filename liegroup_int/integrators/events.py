@@ -90,8 +90,18 @@ class EventTracker:
 
     def arrays(self) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """``(t_events, y_events)`` as scipy returns them: one array per event."""
-        ys = [np.array(y) if y else np.empty((0,)) for y in self.y_events]
+        ys = [(np.array(y) if all(isinstance(v, np.ndarray) for v in y) else list(y)) if y else np.empty((0,))
+              for y in self.y_events]
         return [np.array(t, dtype=float) for t in self.t_events], ys
+
+
+def output_times(t_span: tuple[float, float], t_eval) -> np.ndarray:
+    """The output times after ``t0`` (``t_eval`` must be sorted and inside ``t_span``)."""
+    t0, t_end = float(t_span[0]), float(t_span[1])
+    t = np.asarray(t_eval if t_eval is not None else [], dtype=float).ravel()
+    if np.any(np.diff(t) < 0) or (t.size and (t[0] < t0 or t[-1] > t_end)):
+        raise ValueError(f"t_eval must be sorted and inside [{t0}, {t_end}]")
+    return t[t > t0]
 
 
 class DenseRun:
@@ -103,12 +113,13 @@ class DenseRun:
     The output times do not shorten steps; ``observer`` sees ``t0`` first.
     """
 
-    def __init__(self, problem: Problem, ext: ContinuousExtension, t0: float, y0, t_eval, observer,
-                 keep: bool, specs: list[EventSpec]):
+    def __init__(self, problem: Problem, ext: ContinuousExtension, t_span: tuple[float, float], y0, t_eval,
+                 observer, keep: bool, specs: list[EventSpec]):
+        t0 = float(t_span[0])
         self.problem, self.ext, self.observer = problem, ext, observer
-        self.t_eval = np.asarray(t_eval if t_eval is not None else [], dtype=float).ravel()
-        self.t_eval = self.t_eval[self.t_eval > t0]
+        self.t_eval = output_times(t_span, t_eval)
         self.i_eval = 0
+        self.stopped = False
         self.pieces: list[StepInterpolant] | None = [] if keep else None
         self.events = EventTracker(specs, t0, y0) if specs else None
         self.t0, self.y0 = t0, y0
@@ -125,7 +136,10 @@ class DenseRun:
         while self.i_eval < self.t_eval.size and self.t_eval[self.i_eval] <= t_hi:
             self._observe(self.t_eval[self.i_eval], interp(self.t_eval[self.i_eval]))
             self.i_eval += 1
-        return None if stop is None else (stop, interp(stop))
+        if stop is None:
+            return None
+        self.stopped = True
+        return stop, interp(stop)
 
     def _observe(self, t: float, y) -> None:
         if self.observer is not None:

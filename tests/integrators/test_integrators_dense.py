@@ -186,3 +186,23 @@ def test_dense_output_refuses_commutator_free_and_bad_events():
         integrate(_oscillator, np.ones(2), (0.0, 1.0), method="cf4", dt=0.1, dense_output=True)
     with pytest.raises(TypeError, match="expected callables"):
         integrate(_oscillator, np.ones(2), (0.0, 1.0), dt=0.1, events=[1.0])
+
+
+def test_bad_output_times_and_dense_order_are_refused():
+    with pytest.raises(ValueError, match="t_eval must be sorted"):
+        integrate(_oscillator, np.ones(2), (0.0, 1.0), dt=0.1, t_eval=[0.5, 0.2])
+    with pytest.raises(ValueError, match="continuous order must be in"):
+        integrate(_oscillator, np.ones(2), (0.0, 1.0), dt=0.1, dense_output=True, dense_order=5)
+
+
+def test_dense_output_on_the_sphere_stays_on_it():
+    """A homogeneous space (the action of SO(3) on S^2): interpolated points between steps of
+    a coarse rkmk45 run have unit length to round-off (1e-15 measured)."""
+    from liegroup_int.manifolds import Sphere
+
+    w = np.array([0.3, -1.0, 2.0])
+    sol = integrate(lambda t, y: np.cos(t) * w + np.cross(y, w), np.array([1.0, 0.0, 0.0]), (0.0, 3.0),
+                    space=Sphere(), method="rkmk45", rtol=1e-4, atol=1e-4, dense_output=True)
+    ts = np.linspace(0.0, sol.t_final, 301)
+    assert sol.stats.steps < 100
+    assert np.abs(np.linalg.norm(sol.sol(ts), axis=1) - 1.0).max() < 1e-14
