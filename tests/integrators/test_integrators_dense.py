@@ -100,7 +100,7 @@ def test_dense_output_order_on_so3(method, dts, q):
 def test_output_times_do_not_change_the_steps():
     """rkmk45 at rtol = atol = 1e-9 over 20 s: 817 steps and 4903 evaluations with 200
     output times as without (FSAL carried across them, the same final state bit for bit);
-    landing on them (the driver's t_out) takes 1254 steps."""
+    landing on them (the driver's t_out) takes 1228 steps and 7369 evaluations."""
     kw = dict(space=FB_SPACE, method="rkmk45", rtol=1e-9, atol=1e-9)
     bare = integrate(free_body, FB_Y0, (0.0, 20.0), **kw)
     out = integrate(free_body, FB_Y0, (0.0, 20.0), t_eval=np.linspace(0.0, 20.0, 201), **kw)
