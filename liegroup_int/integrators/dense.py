@@ -78,7 +78,7 @@ def _copy(y):
 class DenseSolution:
     """The piecewise dense output of a run (scipy's ``OdeSolution``): ``sol(t)`` is the state
     at ``t`` in ``[t_min, t_max]``, a point on the group; for an array of times, the points
-    stacked along a new first axis.
+    stacked along a new first axis (a list for states that are not arrays).
 
     Attributes
     ----------
@@ -104,4 +104,5 @@ class DenseSolution:
     def __call__(self, t):
         if np.ndim(t) == 0:
             return self._one(float(t))
-        return np.stack([self._one(float(s)) for s in np.asarray(t, dtype=float)])
+        ys = [self._one(float(s)) for s in np.asarray(t, dtype=float)]
+        return np.stack(ys) if all(isinstance(y, np.ndarray) for y in ys) else ys

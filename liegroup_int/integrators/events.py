@@ -74,12 +74,16 @@ class EventTracker:
         self.y_events: list[list] = [[] for _ in specs]
         self.counts = [0] * len(specs)
 
-    def step(self, interp: Callable, t_old: float, t_new: float, y_new) -> float | None:
-        """Records the events of the step; returns the time of a terminal one, else ``None``."""
+    def step(self, dense: Callable, t_old: float, t_new: float, y_new) -> float | None:
+        """Records the events of the step; returns the time of a terminal one, else ``None``.
+        ``dense()`` returns the step's interpolant (built only when an event is found)."""
         g_new = [float(s.fn(t_new, y_new)) for s in self.specs]
-        found = sorted((locate(s.fn, interp, t_old, t_new), i) for i, s in enumerate(self.specs)
-                       if triggered(self.g[i], g_new[i], s.direction))
+        hits = [i for i, s in enumerate(self.specs) if triggered(self.g[i], g_new[i], s.direction)]
         self.g = g_new
+        if not hits:
+            return None
+        interp = dense()
+        found = sorted((locate(self.specs[i].fn, interp, t_old, t_new), i) for i in hits)
         for t, i in found:
             self.t_events[i].append(t)
             self.y_events[i].append(interp(t))
@@ -128,18 +132,24 @@ class DenseRun:
             observer(t0, y0)
 
     def __call__(self, t_old: float, y_old, t_new: float, y_new, K: np.ndarray):
-        interp = StepInterpolant(self.problem, self.ext, t_old, y_old, t_new, y_new, K)
+        built: list[StepInterpolant] = []
+
+        def dense() -> StepInterpolant:  # the step's interpolant, built once if needed
+            if not built:
+                built.append(StepInterpolant(self.problem, self.ext, t_old, y_old, t_new, y_new, K))
+            return built[0]
+
         if self.pieces is not None:
-            self.pieces.append(interp)
-        stop = self.events.step(interp, t_old, t_new, y_new) if self.events is not None else None
+            self.pieces.append(dense())
+        stop = self.events.step(dense, t_old, t_new, y_new) if self.events is not None else None
         t_hi = t_new if stop is None else stop
         while self.i_eval < self.t_eval.size and self.t_eval[self.i_eval] <= t_hi:
-            self._observe(self.t_eval[self.i_eval], interp(self.t_eval[self.i_eval]))
+            self._observe(self.t_eval[self.i_eval], dense()(self.t_eval[self.i_eval]))
             self.i_eval += 1
         if stop is None:
             return None
         self.stopped = True
-        return stop, interp(stop)
+        return stop, dense()(stop)
 
     def _observe(self, t: float, y) -> None:
         if self.observer is not None:
