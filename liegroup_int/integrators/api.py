@@ -7,13 +7,13 @@ from typing import Callable
 import numpy as np
 
 from ..groups import LieGroup, Product, Rn
-from .drivers import MAX_INCREMENT_ANGLE, integrate_adaptive, integrate_fixed
 from ..tableaux.continuous import continuous_extension
+from .drivers import MAX_INCREMENT_ANGLE, integrate_adaptive, integrate_fixed
 from .events import DenseRun, event_specs
 from .methods import is_commutator_free, resolve_method
 from .observers import StateRecorder
 from .problem import ActionProblem, GroupProblem, Problem
-from .result import Solution
+from .result import Solution, Stats
 
 
 def integrate(
@@ -69,8 +69,8 @@ def integrate(
     dense_output : bool
         Keep every step's interpolant: ``Solution.sol(t)`` is then the state at any ``t``
         in ``[t0, t_final]``, ``Lambda(Theta(theta), y_n)`` with ``Theta`` from the
-        tableau's continuous weights (:mod:`liegroup_int.integrators.dense`; order ``p - 1``:
-        rkmk4 3, rkmk45 4, rkmk65 5), a point of the group or space to round-off.
+        tableau's continuous weights (:mod:`liegroup_int.integrators.dense`; order
+        ``dense_order``), a point of the group or space to round-off.
     events : callable or list of callables, optional
         ``g(t, y) -> float`` with scipy's optional attributes ``terminal`` (stop at the
         first, or at the ``terminal``-th, occurrence) and ``direction`` (``+1``: rising
@@ -80,9 +80,12 @@ def integrate(
         generic (Python) step loop, never the compiled engine.
     dense_order : int, optional
         Order ``q`` of the continuous extension (local error ``O(h^(q+1))``), in
-        ``[1, p]``; default ``p - 1`` (as scipy's RK45 and DOP853). ``q = p`` makes the values
-        between steps as accurate as those at the steps, for more bootstrapped stages per
-        interpolated step (rkmk4 and rkmk45: 2, rkmk65: 4; ``p - 1`` needs 0, 0, 1).
+        ``[1, p]``. Default: ``p`` for the embedded pairs (rkmk32, rkmk45, rkmk65: values
+        between the steps as accurate as at the steps, for 0, 2 and 4 bootstrapped stages per
+        interpolated step), ``p - 1`` for the others (rkmk4: 0 extra stages, rkmk6: 2)
+        (:func:`~liegroup_int.tableaux.continuous.default_order`). ``p - 1`` is the cheaper
+        choice of scipy's RK45 and DOP853 (rkmk45: 0 extra stages, rkmk65: 1). Bootstrapped
+        stages count in ``stats.rhs_evals``.
     monitor : callable, optional
         ``monitor(t, y, stats)`` after every accepted step.
     max_increment_angle : float
@@ -123,8 +126,9 @@ def integrate(
         if is_commutator_free(tab):
             raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
         run = DenseRun(problem, continuous_extension(tab, dense_order), (t0, t_end), y0, t_eval, recorder,
-                       dense_output, specs)
-    kw = dict(monitor=monitor, max_increment_angle=max_increment_angle, on_step=run)
+                       dense_output, specs, Stats())
+    kw = dict(monitor=monitor, max_increment_angle=max_increment_angle, on_step=run,
+              stats=run.stats if run is not None else None)
     obs, t_out = (None, None) if run is not None else (recorder, t_eval)
     if dt is not None:
         t, y, stats = integrate_fixed(problem, tab, (t0, t_end), y0, dt, obs, t_out, **kw)

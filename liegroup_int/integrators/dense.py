@@ -11,9 +11,11 @@ over unchanged:
 
 a point of the group (the action of an algebra element) at every ``theta``, with local error
 ``O(h^(q+1))``, ``Theta(0) = 0`` and ``Theta(1)`` the step's increment (continuous across
-steps). ``q = p - 1`` by default: rkmk4 3, rkmk45 4, rkmk65 5 (one bootstrapped stage,
-evaluated only when the step is interpolated), rkmk6 5 (two). Between steps of a method
-of order ``p`` the interpolated values then carry a global error ``O(h^p) + O(h^q)``.
+steps). By default ``q = p`` for the embedded pairs (rkmk32 3, rkmk45 5 with two
+bootstrapped stages, rkmk65 6 with four) and ``q = p - 1`` for the others (rkmk4 3, rkmk6 5
+with two); bootstrapped stages are evaluated only when the step is interpolated. Between
+steps of a method of order ``p`` the interpolated values carry a global error
+``O(h^p) + O(h^(q+1))``.
 """
 
 from __future__ import annotations
@@ -48,12 +50,13 @@ class StepInterpolant:
     """The dense output of one accepted step, ``t -> Lambda(Theta((t - t_old) / h), y_old)``.
 
     Holds copies of the step's start state and stage rates; bootstrapped stages are
-    evaluated on the first call. At ``t_new`` it returns the step's end state itself.
+    evaluated on the first call (and counted in ``stats.rhs_evals`` when ``stats`` is given).
+    At ``t_new`` it returns the step's end state itself.
     """
 
     def __init__(self, problem: Problem, ext: ContinuousExtension, t_old: float, y_old, t_new: float, y_new,
-                 K: np.ndarray):
-        self.problem, self.ext = problem, ext
+                 K: np.ndarray, stats=None):
+        self.problem, self.ext, self.stats = problem, ext, stats
         self.t_old, self.t_new = float(t_old), float(t_new)
         self.y_old, self.y_new = _copy(y_old), _copy(y_new)
         self._K = K.copy()
@@ -68,6 +71,8 @@ class StepInterpolant:
         if not self._ready:
             self._K = bootstrap_rates(self.problem, self.ext, self.t_old, self.y_old, h, self._K)
             self._ready = True
+            if self.stats is not None:
+                self.stats.rhs_evals += self.ext.extra
         return self.problem.action(increment_at(self.ext, self._K, h, (t - self.t_old) / h), self.y_old)
 
 

@@ -118,8 +118,9 @@ class DenseRun:
     """
 
     def __init__(self, problem: Problem, ext: ContinuousExtension, t_span: tuple[float, float], y0, t_eval,
-                 observer, keep: bool, specs: list[EventSpec]):
+                 observer, keep: bool, specs: list[EventSpec], stats=None):
         t0 = float(t_span[0])
+        self.stats = stats
         self.problem, self.ext, self.observer = problem, ext, observer
         self.t_eval = output_times(t_span, t_eval)
         self.i_eval = 0
@@ -136,7 +137,7 @@ class DenseRun:
 
         def dense() -> StepInterpolant:  # the step's interpolant, built once if needed
             if not built:
-                built.append(StepInterpolant(self.problem, self.ext, t_old, y_old, t_new, y_new, K))
+                built.append(StepInterpolant(self.problem, self.ext, t_old, y_old, t_new, y_new, K, self.stats))
             return built[0]
 
         if self.pieces is not None:

@@ -183,11 +183,23 @@ def _build(tab: ButcherTableau, order: int) -> ContinuousExtension:
         c_f=np.array([float(x) for x in c]), W_f=np.array([[float(x) for x in col] for col in cols]))
 
 
+def default_order(tab: ButcherTableau) -> int:
+    """``p`` for an embedded pair, ``max(1, p - 1)`` otherwise.
+
+    A pair's steps are sized by its embedded error of order ``p - 1`` while it propagates the
+    order-``p`` solution, so its step ends are far more accurate than the tolerance; an
+    interpolant of order ``p - 1`` would be only tolerance-accurate between them (measured on
+    the double pendulum at 1e-8: energy errors 1.4e-6 between the steps, 2.3e-8 at them; 5.6e-8
+    with order ``p``). A fixed-step method's global error ``O(h^p)`` already matches
+    an interpolant of order ``p - 1``."""
+    return tab.order if tab.b_hat is not None else max(1, tab.order - 1)
+
+
 @lru_cache(maxsize=None)
 def continuous_extension(tab: ButcherTableau, order: int | None = None) -> ContinuousExtension:
-    """The continuous extension of ``tab`` of order ``order`` (default ``max(1, p - 1)``),
+    """The continuous extension of ``tab`` of order ``order`` (default :func:`default_order`),
     bootstrapping stages as needed; cached per tableau. Raises ``ValueError`` if none is found."""
-    q = max(1, tab.order - 1) if order is None else int(order)
+    q = default_order(tab) if order is None else int(order)
     if not 1 <= q <= tab.order:
         raise ValueError(f"tableau {tab.name!r}: continuous order must be in [1, {tab.order}], got {order!r}")
     return _build(tab, q)
