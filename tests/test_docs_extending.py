@@ -49,14 +49,15 @@ def page():
 
 def test_every_code_block_is_python_or_declared_text():
     langs = [lang for lang, _ in _blocks(PAGE.read_text())]
-    assert langs.count("python") == 4, langs
+    assert langs.count("python") == 5, langs
     assert set(langs) <= {"python", "text", "toml"}, langs
 
 
 def test_printed_output_is_what_the_page_says(page):
     _, printed = page
-    # the page's comments: "[1.5]" (SO2 angle) and "True" (SE3 screw motion)
-    assert printed == ["", "[1.5]\n", "", "True\n"]
+    # the page's comments: "[1.5]" (SO2 angle), "1 2.741068 29 True" (the free body's
+    # terminal flip event on the dense output) and "True" (SE3 screw motion)
+    assert printed == ["", "[1.5]\n", "", "1 2.741068 29 True\n", "True\n"]
 
 
 def test_so2_derived_api(page):
@@ -96,9 +97,29 @@ def test_so2_integration_is_exact_for_a_linear_rate(page):
 def test_se3_screw_motion_is_exact(page):
     """Constant body twist: every stage increment is a multiple of the twist, where RKMK is
     exact, so the end pose equals exp(twist) to round-off (the page prints np.allclose)."""
-    ns = page[0][3]
+    ns = page[0][4]
     err = np.max(np.abs(ns["sol"].y_final - ns["SE3"].exp(ns["twist"])))
     assert err < 1e-12
+
+
+def test_flip_event_matches_scipy(page):
+    """The free body's first falling zero of W_2 on the dense output (rkmk45 at 1e-9) against
+    solve_ivp's DOP853 at 1e-13 on the body's Euler equations (measured 2.741068056 both):
+    within 1e-7; the run stops there."""
+    from scipy.integrate import solve_ivp
+
+    ns = page[0][3]
+    I = ns["I"]
+
+    def g(t, W):
+        return W[1]
+
+    g.direction, g.terminal = -1, True
+    ref = solve_ivp(lambda t, W: np.cross(I * W, W) / I, (0.0, 20.0), [0.01, 5.0, 0.01], method="DOP853",
+                    rtol=1e-13, atol=1e-13, events=g)
+    sol = ns["sol"]
+    assert abs(sol.t_events[0][0] - ref.t_events[0][0]) < 1e-7
+    assert sol.status == 1 and sol.t_final == sol.t_events[0][0]
 
 
 def test_ralston3_is_built_and_a_wrong_weight_is_refused(page):

@@ -1,6 +1,7 @@
 """Explicit RK/RKMK integrators on any problem plugin (docs/theory.md section 2)."""
 
 from .api import integrate
+from .dense import DenseSolution
 from .drivers import MAX_INCREMENT_ANGLE, initial_step, integrate_adaptive, integrate_fixed, stepper_for
 from .methods import METHODS, is_adaptive, resolve_method
 from .observers import DiagnosticsRecorder, Observers, StateRecorder
@@ -11,7 +12,7 @@ from .stepsize import StableStep, stable_step
 from .rkmk import combine, compute_stages, error_estimate, error_norm, rkmk_step
 
 __all__ = [
-    "integrate", "integrate_fixed", "integrate_adaptive", "initial_step", "stepper_for", "MAX_INCREMENT_ANGLE",
+    "integrate", "DenseSolution", "integrate_fixed", "integrate_adaptive", "initial_step", "stepper_for", "MAX_INCREMENT_ANGLE",
     "METHODS", "resolve_method", "is_adaptive", "StateRecorder", "DiagnosticsRecorder", "Observers",
     "Problem", "GroupProblem", "ActionProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
     "combine", "eigenvalues", "growth_check", "GrowthReport", "jacobian", "spectral_radius", "modal_analysis",

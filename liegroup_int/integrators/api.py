@@ -7,11 +7,13 @@ from typing import Callable
 import numpy as np
 
 from ..groups import LieGroup, Product, Rn
+from ..tableaux.continuous import continuous_extension
 from .drivers import MAX_INCREMENT_ANGLE, integrate_adaptive, integrate_fixed
-from .methods import resolve_method
+from .events import DenseRun, event_specs
+from .methods import is_commutator_free, resolve_method
 from .observers import StateRecorder
 from .problem import ActionProblem, GroupProblem, Problem
-from .result import Solution
+from .result import Solution, Stats
 
 
 def integrate(
@@ -28,6 +30,9 @@ def integrate(
     monitor: Callable | None = None,
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
     coordinates: str = "exp",
+    dense_output: bool = False,
+    events=None,
+    dense_order: int | None = None,
 ) -> Solution:
     """Integrate ``dy/dt = f(t, y) y`` on a Lie group with an explicit RKMK method.
 
@@ -52,10 +57,35 @@ def integrate(
     rtol, atol : float, optional
         Tolerances of the adaptive driver (a missing one defaults to 1e-6 / 1e-9).
     t_eval : array_like, optional
-        Output times; by default only the final time (and ``t0``) are recorded.
+        Sorted output times in ``[t0, t_end]``; ``Solution.t`` holds ``t0``, these and the
+        final time (by default only ``t0`` and the final time). Their states come from the
+        dense output (below), so they do not shorten the steps: the step sequence is that of
+        the run without ``t_eval``. The compiled engine (a ``numba.njit`` field, or a
+        problem with compiled kernels, and no ``monitor``, ``dense_output`` or ``events``)
+        and the commutator-free methods land on them instead.
     observer : callable, optional
         ``observer(t, y)`` at output times. Default: a :class:`StateRecorder`, whose
         states are returned in ``Solution.y``.
+    dense_output : bool
+        Keep every step's interpolant: ``Solution.sol(t)`` is then the state at any ``t``
+        in ``[t0, t_final]``, ``Lambda(Theta(theta), y_n)`` with ``Theta`` from the
+        tableau's continuous weights (:mod:`liegroup_int.integrators.dense`; order
+        ``dense_order``), a point of the group or space to round-off.
+    events : callable or list of callables, optional
+        ``g(t, y) -> float`` with scipy's optional attributes ``terminal`` (stop at the
+        first, or at the ``terminal``-th, occurrence) and ``direction`` (``+1``: rising
+        zeros only, ``-1``: falling, ``0``: both). Zeros are located on the dense output by
+        Brent's method to ``4 eps`` (:mod:`liegroup_int.integrators.events`) and returned in
+        ``Solution.t_events`` / ``Solution.y_events``. Dense output and events run the
+        generic (Python) step loop, never the compiled engine.
+    dense_order : int, optional
+        Order ``q`` of the continuous extension (local error ``O(h^(q+1))``), in
+        ``[1, p]``. Default: ``p`` for the embedded pairs (rkmk32, rkmk45, rkmk65: values
+        between the steps as accurate as at the steps, for 0, 2 and 4 bootstrapped stages per
+        interpolated step), ``p - 1`` for the others (rkmk4: 0 extra stages, rkmk6: 2)
+        (:func:`~liegroup_int.tableaux.continuous.default_order`). ``p - 1`` is the cheaper
+        choice of scipy's RK45 and DOP853 (rkmk45: 0 extra stages, rkmk65: 1). Bootstrapped
+        stages count in ``stats.rhs_evals``.
     monitor : callable, optional
         ``monitor(t, y, stats)`` after every accepted step.
     max_increment_angle : float
@@ -67,6 +97,9 @@ def integrate(
     Returns
     -------
     Solution
+        ``t``, ``y`` at the output times; ``sol`` (with ``dense_output``), ``t_events``,
+        ``y_events`` (with ``events``) and ``status`` (0: reached ``t_end``, 1: a terminal
+        event) as in ``scipy.integrate.solve_ivp``.
 
     Examples
     --------
@@ -77,43 +110,70 @@ def integrate(
     >>> np.allclose(sol.y_final, SO3.exp(np.pi * w))
     True
     """
-    if coordinates != "exp" and (isinstance(f, Problem) or space is None or isinstance(space, LieGroup)):
-        raise ValueError("coordinates='cayley' applies to homogeneous spaces (space=M); use an ActionProblem")
-    if isinstance(f, Problem):
-        problem = f
-    elif space is not None and not isinstance(space, LieGroup):
-        # a homogeneous space (liegroup_int.manifolds); a group without a closed-form
-        # dexpinv gets its Bernoulli series truncated to the method's order
-        series = type(space.group).dexpinv is LieGroup.dexpinv
-        problem = ActionProblem(space, f, dexpinv_order=resolve_method(method).order - 1 if series else None,
-                                coordinates=coordinates)
-        y0 = np.asarray(y0, dtype=float)
-    else:
-        if space is None:
-            y0 = np.asarray(y0, dtype=float)
-            space = Rn(y0.shape[-1])
-        if isinstance(space, Product) and isinstance(y0, (tuple, list)):
-            y0 = space.join(*y0)
-        y0 = np.asarray(y0, dtype=float)
-        problem = GroupProblem(space, f)
+    problem, y0 = _problem(f, y0, space, method, coordinates)
     tab = resolve_method(method)
     t0, t_end = float(t_span[0]), float(t_span[1])
     if not t_end > t0:
         raise ValueError(f"t_span must have t_end > t0, got {t_span!r}")
-    recorder = observer if observer is not None else StateRecorder()
-    if dt is not None:
-        if rtol is not None or atol is not None:
-            raise ValueError("give either dt (fixed step) or rtol/atol (adaptive), not both")
-        t, y, stats = integrate_fixed(problem, tab, (t0, t_end), y0, dt, recorder, t_eval, monitor, max_increment_angle)
-    elif rtol is not None or atol is not None:
-        t, y, stats = integrate_adaptive(
-            problem, tab, (t0, t_end), y0, rtol if rtol is not None else 1e-6, atol if atol is not None else 1e-9,
-            recorder, t_eval, monitor, max_increment_angle=max_increment_angle,
-        )
-    else:
+    if dt is None and rtol is None and atol is None:
         raise ValueError("give a step size dt, or rtol/atol for an adaptive pair")
+    if dt is not None and (rtol is not None or atol is not None):
+        raise ValueError("give either dt (fixed step) or rtol/atol (adaptive), not both")
+    recorder = observer if observer is not None else StateRecorder()
+    specs = event_specs(events)
+    run = None
+    if dense_output or specs or (t_eval is not None and not _lands_on_outputs(problem, tab, monitor)):
+        if is_commutator_free(tab):
+            raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
+        run = DenseRun(problem, continuous_extension(tab, dense_order), (t0, t_end), y0, t_eval, recorder,
+                       dense_output, specs, Stats())
+    kw = dict(monitor=monitor, max_increment_angle=max_increment_angle, on_step=run,
+              stats=run.stats if run is not None else None)
+    obs, t_out = (None, None) if run is not None else (recorder, t_eval)
+    if dt is not None:
+        t, y, stats = integrate_fixed(problem, tab, (t0, t_end), y0, dt, obs, t_out, **kw)
+    else:
+        t, y, stats = integrate_adaptive(problem, tab, (t0, t_end), y0, rtol if rtol is not None else 1e-6,
+                                         atol if atol is not None else 1e-9, obs, t_out, **kw)
+    return _solution(recorder, run, t, y, stats, tab.name)
+
+
+def _problem(f, y0, space, method, coordinates):
+    """The :class:`Problem` and initial state ``integrate`` runs."""
+    if coordinates != "exp" and (isinstance(f, Problem) or space is None or isinstance(space, LieGroup)):
+        raise ValueError("coordinates='cayley' applies to homogeneous spaces (space=M); use an ActionProblem")
+    if isinstance(f, Problem):
+        return f, y0
+    if space is not None and not isinstance(space, LieGroup):
+        # a homogeneous space (liegroup_int.manifolds); a group without a closed-form
+        # dexpinv gets its Bernoulli series truncated to the method's order
+        series = type(space.group).dexpinv is LieGroup.dexpinv
+        return (ActionProblem(space, f, dexpinv_order=resolve_method(method).order - 1 if series else None,
+                              coordinates=coordinates), np.asarray(y0, dtype=float))
+    if space is None:
+        y0 = np.asarray(y0, dtype=float)
+        space = Rn(y0.shape[-1])
+    if isinstance(space, Product) and isinstance(y0, (tuple, list)):
+        y0 = space.join(*y0)
+    return GroupProblem(space, f), np.asarray(y0, dtype=float)
+
+
+def _lands_on_outputs(problem: Problem, tab, monitor) -> bool:
+    """Whether the run lands on the output times instead of interpolating: the compiled
+    engine (a problem with compiled kernels and no monitor) and commutator-free methods do."""
+    if is_commutator_free(tab):
+        return True
+    hook = getattr(problem, "compiled_kernels", None)
+    return monitor is None and hook is not None and hook() is not None
+
+
+def _solution(recorder, run, t, y, stats, name) -> Solution:
+    sol = run.finish(t, y) if run is not None else None
     if isinstance(recorder, StateRecorder):
         ts, ys = np.asarray(recorder.t), recorder.y
     else:
         ts, ys = np.asarray(getattr(recorder, "t", [])), []
-    return Solution(t=ts, y=ys, t_final=t, y_final=y, stats=stats, method=tab.name, observer=recorder)
+    t_events, y_events = run.events.arrays() if run is not None and run.events is not None else (None, None)
+    status = 1 if run is not None and run.stopped else 0
+    return Solution(t=ts, y=ys, t_final=t, y_final=y, stats=stats, method=name, observer=recorder, sol=sol,
+                    t_events=t_events, y_events=y_events, status=status)

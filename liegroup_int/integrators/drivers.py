@@ -8,6 +8,7 @@ the observer at ``t0``, at every output time and at the final time, and an optio
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
@@ -105,6 +106,7 @@ def integrate_fixed(
     monitor: Callable | None = None,
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
     stats: Stats | None = None,
+    on_step: Callable | None = None,
 ):
     """Integrate with constant step ``dt`` (shortened only to land on output times).
 
@@ -130,6 +132,11 @@ def integrate_fixed(
         :class:`StepSizeError` (dt too large for the rotation rate).
     stats : Stats, optional
         Counters to continue (resumed runs); a new one otherwise.
+    on_step : callable, optional
+        ``on_step(t_old, y_old, t_new, y_new, K) -> None or (t, y)`` after every accepted
+        RKMK step, with ``K`` the step's stage rates (dense output and events,
+        :class:`~.events.DenseRun`); returning ``(t, y)`` ends the run there (a terminal
+        event). It runs the generic loop (not the compiled engine).
 
     Returns
     -------
@@ -141,11 +148,10 @@ def integrate_fixed(
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
     cf = is_commutator_free(tab)  # several exponentials per stage, no dexpinv
-    stepper = stepper_for(problem, tab, monitor) if not cf else None
-    K = _workspace(problem, tab, y0) if stepper is None else None
-    Q = _quadrature_workspace(problem, tab)
-    fsal = _fsal(problem, tab)
-    f0 = None  # f(t, y) from the last stage of the previous step (FSAL pairs)
+    if cf and on_step is not None:
+        raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
+    stepper = stepper_for(problem, tab, monitor) if not (cf or on_step is not None) else None
+    steps = _GenericSteps(problem, tab, y0, stats, monitor, on_step) if stepper is None else None
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -155,34 +161,69 @@ def integrate_fixed(
         n = max(1, int(np.ceil((stop - t) / dt - 1e-9)))
         if stepper is not None:
             t, y = _advance_compiled(stepper, t, y, stop, dt, n, max_increment_angle, stats)
-            if observer is not None:
-                observer(t, y)
-            continue
-        t_start = t
-        for i in range(n):
-            t_next = stop if i == n - 1 else t_start + (i + 1) * dt
-            h = t_next - t
-            if cf:
-                y, u = cf_step(problem, tab, t, y, h, K, Q)
-                f_last = None
-            else:
-                y, u, f_last = rkmk_step_fsal(problem, tab, t, y, h, K, Q, f0, fsal)
-            stats.rhs_evals += tab.stages - (f0 is not None)
-            f0 = f_last
-            _check_finite(u, t_next, stats.steps + 1)
-            angle = problem.rotation_angle(u)
-            if angle > max_increment_angle:
-                raise _too_large(angle, max_increment_angle, t_next, stats.steps + 1)
-            t = t_next
-            stats.accept(h)
-            if Q is not None:
-                stats.quadrature += step_quadrature(tab, Q, h)
-            if monitor is not None:
-                monitor(t, y, stats)
+        else:
+            t, y, stopped = _fixed_steps(steps, t, y, stop, dt, n, max_increment_angle)
+            if stopped:
+                break
         if observer is not None:
             observer(t, y)
     stats.wall_time_s += time.perf_counter() - start
     return t, y, stats
+
+
+class _GenericSteps:
+    """The drivers' generic (Python) step: work arrays, FSAL reuse and the book-keeping of
+    an accepted step (counters, quadrature, ``monitor``, ``on_step``)."""
+
+    def __init__(self, problem: Problem, tab: ButcherTableau, y0, stats: Stats, monitor, on_step):
+        self.problem, self.tab, self.stats = problem, tab, stats
+        self.monitor, self.on_step = monitor, on_step
+        self.cf = is_commutator_free(tab)
+        self.K = _workspace(problem, tab, y0)
+        self.Q = _quadrature_workspace(problem, tab)
+        self.fsal = _fsal(problem, tab)
+        self.f0 = None  # f(t, y) of the current state, once known (FSAL pairs; kept over rejections)
+
+    def attempt(self, t: float, y, h: float):
+        """One step of size ``h`` from ``(t, y)``: ``(y_new, u, f_last)``; stage rates in ``K``."""
+        if self.cf:
+            y_new, u = cf_step(self.problem, self.tab, t, y, h, self.K, self.Q)
+            f_last = None
+        else:
+            y_new, u, f_last = rkmk_step_fsal(self.problem, self.tab, t, y, h, self.K, self.Q, self.f0, self.fsal)
+        self.stats.rhs_evals += self.tab.stages - (self.f0 is not None)
+        if self.fsal and self.f0 is None:
+            self.f0 = self.K[0].copy()  # f(t, y): reused by retries of this step
+        return y_new, u, f_last
+
+    def accept(self, t_old: float, y_old, t: float, y, h: float, f_last):
+        """Book-keeping of an accepted step; ``on_step``'s ``(t, y)`` to stop at, or ``None``."""
+        self.f0 = f_last
+        self.stats.accept(h)
+        if self.Q is not None:
+            self.stats.quadrature += step_quadrature(self.tab, self.Q, h)
+        if self.monitor is not None:
+            self.monitor(t, y, self.stats)
+        return self.on_step(t_old, y_old, t, y, self.K) if self.on_step is not None else None
+
+
+def _fixed_steps(steps: _GenericSteps, t: float, y, stop: float, dt: float, n: int, max_angle: float):
+    """``n`` steps of :func:`integrate_fixed`'s grid from ``(t, y)`` to ``stop``:
+    ``(t, y, stopped)``, ``stopped`` when ``on_step`` ended the run at ``(t, y)``."""
+    t_start = t
+    for i in range(n):
+        t_next = stop if i == n - 1 else t_start + (i + 1) * dt
+        h = t_next - t
+        y_new, u, f_last = steps.attempt(t, y, h)
+        _check_finite(u, t_next, steps.stats.steps + 1)
+        angle = steps.problem.rotation_angle(u)
+        if angle > max_angle:
+            raise _too_large(angle, max_angle, t_next, steps.stats.steps + 1)
+        hit = steps.accept(t, y, t_next, y_new, h, f_last)
+        if hit is not None:
+            return hit[0], hit[1], True
+        t, y = t_next, y_new
+    return t, y, False
 
 
 def initial_step(problem: Problem, tab: ButcherTableau, t0: float, y0, t_end: float, rtol: float, atol: float) -> float:
@@ -221,6 +262,7 @@ def integrate_adaptive(
     max_increment_angle: float = MAX_INCREMENT_ANGLE,
     controller: PIController = DEFAULT_CONTROLLER,
     stats: Stats | None = None,
+    on_step: Callable | None = None,
 ):
     """Integrate with an embedded pair and PI step-size control.
 
@@ -236,6 +278,9 @@ def integrate_adaptive(
     times in one call when the problem has compiled kernels
     (:meth:`Problem.compiled_kernels`), with the same arithmetic, controller and limits.
 
+    ``on_step(t_old, y_old, t_new, y_new, K)`` is called after every accepted step as in
+    :func:`integrate_fixed` (generic loop; returning ``(t, y)`` ends the run there).
+
     Returns
     -------
     (t_end, y_end, stats)
@@ -247,83 +292,113 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    stepper = stepper_for(problem, tab, monitor)
-    K = _workspace(problem, tab, y0) if stepper is None else None
-    Q = _quadrature_workspace(problem, tab)
-    fsal = _fsal(problem, tab)
-    f0 = None  # f(t, y) of the current state, once known (FSAL pairs; kept over rejections)
-    gains = controller.gains(tab)
+    stepper = stepper_for(problem, tab, monitor) if on_step is None else None
+    steps = _GenericSteps(problem, tab, y0, stats, monitor, on_step) if stepper is None else None
+    run = _AdaptiveRun(rtol, atol, h_max, max_steps, max_increment_angle, controller.gains(tab),
+                       _initial_control(problem, tab, (t0, t_end), y0, rtol, atol, h0, h_max, controller, stats))
+    stats.controller = run.ctl.memory()
     t, y = t0, y0
-    memory = stats.controller  # continued run: the controller as it was at its last output
-    if memory is not None and h0 is None:
-        h, err_prev, rate = min(memory["h"], h_max), memory["err_prev"], memory["rate"]
-    else:
-        h = min(h0 if h0 is not None else initial_step(problem, tab, t0, y0, t_end, rtol, atol), h_max)
-        err_prev = controller.err_floor
-        rate = 0.0  # rotation rate once the guard has rejected a step (controller.rotation_rate)
-
-    def remember():  # the controller's memory, kept in the stats at every output time
-        stats.controller = {"h": float(h), "err_prev": float(err_prev), "rate": float(rate)}
-
-    remember()
     if observer is not None:
         observer(t, y)
     start = time.perf_counter()
-    i_stop = 0
-    while i_stop < len(stops):
-        stop = stops[i_stop]
+    for stop in stops:
         if stepper is not None:  # every attempt up to ``stop`` in one compiled call
-            res = stepper.advance_to(t, y, stop, h, err_prev, rate, rtol, atol, h_max, max_steps - stats.steps,
-                                     max_increment_angle, gains)
-            stats.accept_many(res.steps, res.h_min, res.h_max)
-            stats.quadrature += res.quadrature
-            stats.rejected += res.rejected
-            stats.rhs_evals += res.rhs_evals
-            t, y, h, err_prev, rate = res.t, res.y, res.h, res.err_prev, res.rate
-            if res.status == "max-steps":
-                raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
-            if res.status == "underflow":
-                raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
-            remember()
-            if observer is not None:
-                observer(t, y)
-            i_stop += 1
-            continue
-        if stats.steps >= max_steps:
-            raise StepSizeError(f"reached max_steps={max_steps} at t={t:.6g}", t, stats.steps)
-        land = t + h >= stop - 1e-12 * max(1.0, abs(stop))
-        h_try = stop - t if land else h
-        y_new, u, f_last = rkmk_step_fsal(problem, tab, t, y, h_try, K, Q, f0, fsal)
-        stats.rhs_evals += tab.stages - (f0 is not None)
-        if fsal and f0 is None:
-            f0 = K[0].copy()  # f(t, y): reused by retries of this step
-        err = error_norm(error_estimate(tab, K, h_try),
-                         np.maximum(problem.increment_scale(y), problem.increment_scale(y_new)), rtol, atol)
-        angle = problem.rotation_angle(u)
-        if not np.isfinite(err):
-            err = np.inf
-        rate = rotation_rate(angle, h_try, max_increment_angle, rate)
-        if err <= 1.0 and angle <= max_increment_angle:
-            t = stop if land else t + h_try
-            y = y_new
-            f0 = f_last
-            stats.accept(h_try)
-            if Q is not None:
-                stats.quadrature += step_quadrature(tab, Q, h_try)
-            h, err_prev = h_accepted(err, err_prev, h_try, h_max, gains)
-            h = rotation_cap(h, rate, max_increment_angle, gains)
-            if monitor is not None:
-                monitor(t, y, stats)
-            if land:
-                remember()
-                if observer is not None:
-                    observer(t, y)
-                i_stop += 1
+            t, y = run.compiled(stepper, t, y, stop, stats)
         else:
-            stats.rejected += 1
-            h = rotation_cap(h_rejected(err, angle, h_try, max_increment_angle, gains), rate, max_increment_angle,
-                             gains)
-            if h < 1e-14 * max(1.0, abs(t)):
-                raise StepSizeError(f"step size underflow (h={h:.3g}) at t={t:.6g}", t, stats.steps)
+            t, y, stopped = run.generic(steps, t, y, stop)
+            if stopped:
+                break
+        stats.controller = run.ctl.memory()  # kept at every output time (resumed runs)
+        if observer is not None:
+            observer(t, y)
     stats.wall_time_s += time.perf_counter() - start
     return t, y, stats
+
+
+@dataclass
+class _Control:
+    """The adaptive controller's memory: the next step to try, the last error norm and the
+    rotation rate (0 until the rotation guard rejects a step: controller.rotation_rate)."""
+
+    h: float
+    err_prev: float
+    rate: float
+
+    def memory(self) -> dict:
+        return {"h": float(self.h), "err_prev": float(self.err_prev), "rate": float(self.rate)}
+
+
+def _initial_control(problem, tab, t_span, y0, rtol, atol, h0, h_max, controller, stats) -> _Control:
+    """A continued run's controller as it was at its last output (``stats.controller``), or
+    a new one from ``h0`` or :func:`initial_step`."""
+    memory = stats.controller
+    if memory is not None and h0 is None:
+        return _Control(min(memory["h"], h_max), memory["err_prev"], memory["rate"])
+    h = h0 if h0 is not None else initial_step(problem, tab, t_span[0], y0, t_span[1], rtol, atol)
+    return _Control(min(h, h_max), controller.err_floor, 0.0)
+
+
+@dataclass
+class _AdaptiveRun:
+    """The limits and controller of one adaptive run; attempts up to one output time."""
+
+    rtol: float
+    atol: float
+    h_max: float
+    max_steps: int
+    max_angle: float
+    gains: tuple
+    ctl: _Control
+
+    def compiled(self, stepper, t: float, y, stop: float, stats: Stats):
+        """Every attempt from ``(t, y)`` to ``stop`` in one call of the compiled engine."""
+        c = self.ctl
+        res = stepper.advance_to(t, y, stop, c.h, c.err_prev, c.rate, self.rtol, self.atol, self.h_max,
+                                 self.max_steps - stats.steps, self.max_angle, self.gains)
+        stats.accept_many(res.steps, res.h_min, res.h_max)
+        stats.quadrature += res.quadrature
+        stats.rejected += res.rejected
+        stats.rhs_evals += res.rhs_evals
+        c.h, c.err_prev, c.rate = res.h, res.err_prev, res.rate
+        if res.status == "max-steps":
+            raise StepSizeError(f"reached max_steps={self.max_steps} at t={res.t:.6g}", res.t, stats.steps)
+        if res.status == "underflow":
+            raise StepSizeError(f"step size underflow (h={c.h:.3g}) at t={res.t:.6g}", res.t, stats.steps)
+        return res.t, res.y
+
+    def generic(self, steps: _GenericSteps, t: float, y, stop: float):
+        """Attempts from ``(t, y)`` until a step lands on ``stop``: ``(t, y, stopped)``,
+        ``stopped`` when ``on_step`` ended the run at ``(t, y)``."""
+        c, stats = self.ctl, steps.stats
+        while True:
+            if stats.steps >= self.max_steps:
+                raise StepSizeError(f"reached max_steps={self.max_steps} at t={t:.6g}", t, stats.steps)
+            land = t + c.h >= stop - 1e-12 * max(1.0, abs(stop))
+            h_try = stop - t if land else c.h
+            y_new, u, f_last = steps.attempt(t, y, h_try)
+            err, angle = self._measure(steps, y, y_new, u, h_try)
+            c.rate = rotation_rate(angle, h_try, self.max_angle, c.rate)
+            if err <= 1.0 and angle <= self.max_angle:
+                t_new = stop if land else t + h_try
+                c.h, c.err_prev = h_accepted(err, c.err_prev, h_try, self.h_max, self.gains)
+                c.h = rotation_cap(c.h, c.rate, self.max_angle, self.gains)
+                hit = steps.accept(t, y, t_new, y_new, h_try, f_last)
+                if hit is not None:
+                    return hit[0], hit[1], True
+                t, y = t_new, y_new
+                if land:
+                    return t, y, False
+            else:
+                stats.rejected += 1
+                c.h = rotation_cap(h_rejected(err, angle, h_try, self.max_angle, self.gains), c.rate,
+                                   self.max_angle, self.gains)
+                if c.h < 1e-14 * max(1.0, abs(t)):
+                    raise StepSizeError(f"step size underflow (h={c.h:.3g}) at t={t:.6g}", t, stats.steps)
+
+    def _measure(self, steps: _GenericSteps, y, y_new, u, h: float) -> tuple[float, float]:
+        """``(err, angle)`` of an attempt: the embedded error norm (``inf`` if not finite)
+        and the rotation angle of its increment."""
+        p = steps.problem
+        err = error_norm(error_estimate(steps.tab, steps.K, h),
+                         np.maximum(p.increment_scale(y), p.increment_scale(y_new)), self.rtol, self.atol)
+        return (err if np.isfinite(err) else np.inf), p.rotation_angle(u)

@@ -86,6 +86,15 @@ class Solution:
     stats : Stats
     method : str
         Name of the tableau used.
+    sol : DenseSolution or None
+        With ``dense_output=True``: ``sol(t)``, the state at any ``t`` in ``[t0, t_final]``
+        (:class:`~liegroup_int.integrators.dense.DenseSolution`).
+    t_events : list of ndarray or None
+        With ``events``: for each event, the times of its zeros.
+    y_events : list of ndarray or None
+        With ``events``: for each event, the states at its zeros (stacked along axis 0).
+    status : int
+        0: the run reached ``t_end``; 1: a terminal event stopped it at ``t_final``.
     """
 
     t: np.ndarray
@@ -95,6 +104,10 @@ class Solution:
     stats: Stats
     method: str
     observer: object = field(default=None, repr=False)
+    sol: object = field(default=None, repr=False)
+    t_events: list | None = None
+    y_events: list | None = None
+    status: int = 0
 
 
 class IntegrationError(RuntimeError):

@@ -11,11 +11,14 @@ This layer depends only on numpy and the standard library.  Public names:
 * Linear stability: :func:`stability_polynomial`,
   :func:`imaginary_axis_limit`, :func:`real_axis_limit`,
   :func:`imaginary_axis_growth`.
+* Dense output: :func:`continuous_extension` (exact continuous weights, bootstrapped
+  stages where needed), :class:`ContinuousExtension`.
 * Registry: :data:`REGISTRY` (by tableau name), :data:`NAMES` (every accepted name,
   RKMK method names included), :func:`resolve` and one constant per method.
 """
 
 from .base import ButcherTableau
+from .continuous import ContinuousExtension, continuous_extension
 from .commutator_free import CF3, CF4, CF_REGISTRY, CG3, CG4A, CommutatorFreeTableau
 from .methods import (
     BS32,
@@ -90,4 +93,6 @@ __all__ = [
     "imaginary_axis_limit",
     "real_axis_limit",
     "imaginary_axis_growth",
+    "ContinuousExtension",
+    "continuous_extension",
 ]
