@@ -249,7 +249,7 @@ class GalerkinBeamProblem(Problem):
     @property
     def _nb(self):
         if self._nb_kernels is None and self.backend == "numba":
-            from .galerkin_numba import NumbaGalerkinKernels
+            from .kernels.galerkin import NumbaGalerkinKernels
 
             self._nb_kernels = NumbaGalerkinKernels(self)
         return self._nb_kernels
@@ -320,7 +320,7 @@ class GalerkinBeamProblem(Problem):
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
         u = self.project_increment(u)
         if self._nb is not None:
-            return self._nb.action(u, y)
+            return self._nb.action(u, y, GalerkinBeamState)
         th, th_s = self.B0 @ u[1], self.B1 @ u[1]
         E = exp_so3(th)
         K = rot_T(E, y.K) + jr_times(th, th_s)
@@ -426,7 +426,7 @@ class GalerkinBeamProblem(Problem):
         """The compiled engine's kernels (backend="numba"), else ``None``."""
         if self._nb is None:
             return None
-        return self._nb.compiled_problem()
+        return self._nb.compiled_problem(GalerkinBeamState)
 
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):

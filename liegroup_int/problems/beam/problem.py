@@ -125,7 +125,7 @@ class BeamProblem(Problem):
     initial : InitialConditions
     backend : {"numpy", "numba"}
         Stage kernels: NumPy arrays (default) or the compiled kernels of
-        :mod:`.kernels_numba` (same results to round-off; needs numba).
+        :mod:`.kernels.collocation` (same results to round-off; needs numba).
     kelvin_voigt : float
         Retardation time ``tau >= 0`` [s] of an optional Kelvin-Voigt (strain-rate)
         damping: the resultants become ``n = R C_N (Gamma + tau dGamma/dt)`` and
@@ -191,7 +191,7 @@ class BeamProblem(Problem):
                                    or self.translating_ends or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
             for e in self.neumann_ends) or any(j.load is not None for j in self.joints))
-        # --- backend selection (compiled kernels: kernels_numba.py) -------------------
+        # --- backend selection (compiled kernels: kernels/collocation.py) ------------
         if backend not in ("numpy", "numba"):
             raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
         self.backend = backend
@@ -208,7 +208,7 @@ class BeamProblem(Problem):
         """The compiled kernels' data and wrappers (backend="numba"), built at first use:
         checking a scene (building its problem) imports no numba."""
         if self._nb_kernels is None and self.backend == "numba":
-            from .kernels_numba import NumbaBeamKernels
+            from .kernels.collocation import NumbaBeamKernels
 
             self._nb_kernels = NumbaBeamKernels(self)
         return self._nb_kernels
@@ -387,7 +387,7 @@ class BeamProblem(Problem):
     def compiled_kernels(self):
         """The compiled engine's kernels (backend="numba" only): stage rates, action,
         Newton-Schulz end step, rotation angle and error scale of
-        :mod:`.kernels_numba`, so that the drivers run all the steps between two output
+        :mod:`.kernels.collocation`, so that the drivers run all the steps between two output
         times in one compiled call. ``None`` with the NumPy backend, and when a load
         profile is not a plain :class:`Profile` (the generic path then calls it in
         Python)."""
