@@ -47,7 +47,7 @@ from .physics import (
     strain,
 )
 from .profiles import LoadTable, set_loads
-from .vec3 import (add, axpy, cross, div, dot, inertia, mul, norm, put, put_at, rot, rot_T, row, scale, sub,
+from .vec3 import (add, axpy, cross, div, dot, inertia, norm, put, put_at, rot, rot_T, row, scale, sub,
                    sym_add, sym_solve, sym_times)
 
 #: Largest ``n_ctrl`` for which ``solver="auto"`` uses the dense inverse of ``M_c``.
