@@ -9,6 +9,12 @@ stage rate at small ``n``, so the data cross into compiled code as two arrays: `
 field). :func:`pack` builds them from a NamedTuple; the formulation's compiled ``unpack``
 reads the fields back (views, no copy) with :func:`f1` ... :func:`i2`, in the order of the
 NamedTuple's fields; :func:`views` gives the same views in Python.
+
+The kernels that take the data are compiled without numba's reference counting
+(``_nrt=False``): they allocate nothing (numba refuses to compile an allocation there),
+and with counting every inlined helper that receives the NamedTuple would increment and
+decrement the count of each of its arrays (measured: the primal stage rate 3.5 times
+slower at n = 21).
 """
 
 from __future__ import annotations
