@@ -13,7 +13,10 @@ offset, algebra offset, size)`` per factor, ``kind`` one of :data:`KIND_RN`,
 
 The SO(3) coefficients use the branch logic of :mod:`.so3_coefficients`: its 12-term Taylor
 polynomials (passed at run time as ``ser``, :func:`series_table`, so numba's cache never
-freezes them) below ``TAYLOR_THRESHOLD``, the closed forms above.
+freezes them) below ``TAYLOR_THRESHOLD``, the closed forms above. The polynomials stop at
+the first term below ``1e-20`` relative (:func:`_n_terms`). These are the compiled SO(3)
+coefficients of the package: every compiled kernel that needs them (the beam's too) calls
+:func:`coefficients`, :func:`coef_ABC`, :func:`coef_ABCB1C1` or :func:`coef_D`.
 """
 
 from __future__ import annotations
@@ -26,11 +29,12 @@ from numba import njit
 from .so3_coefficients import TAYLOR, TAYLOR_THRESHOLD
 
 KIND_RN, KIND_SO3, KIND_SE3 = 0, 1, 2
-_KEYS = ("A", "B", "C", "D", "E", "F")
+_KEYS = ("A", "B", "C", "D", "E", "F", "B1", "C1")
+_IA, _IB, _IC, _ID, _IB1, _IC1 = 0, 1, 2, 3, 6, 7
 
 
 def series_table() -> np.ndarray:
-    """Float Taylor coefficients ``(6, N_TERMS)`` of A, B, C, D, E, F (in that order)."""
+    """Float Taylor coefficients ``(8, N_TERMS)`` of A, B, C, D, E, F, B1, C1 (in that order)."""
     return np.array([[float(c) for c in TAYLOR[k]] for k in _KEYS])
 
 
@@ -77,9 +81,21 @@ def factor_table(space) -> np.ndarray | None:
 
 # ====================================================================== scalar helpers
 @njit(cache=True, inline="always")
+def _n_terms(t2, m):
+    """Series terms needed below 1e-20 relative truncation: 5 for t < 0.05 rad, 7 for
+    t < 0.25 rad (largest dropped term ~t^(2k) / (2k + 1)!), all ``m`` otherwise."""
+    if t2 < 2.5e-3:
+        return min(5, m)
+    if t2 < 6.25e-2:
+        return min(7, m)
+    return m
+
+
+@njit(cache=True, inline="always")
 def _series(ser, k, t2):
-    out = ser[k, ser.shape[1] - 1]
-    for j in range(ser.shape[1] - 2, -1, -1):
+    m = _n_terms(t2, ser.shape[1])
+    out = ser[k, m - 1]
+    for j in range(m - 2, -1, -1):
         out = out * t2 + ser[k, j]
     return out
 
@@ -90,16 +106,58 @@ def _coef_AB(t, ser, thr):
     :func:`coefficients`."""
     if t < thr:
         t2 = t * t
-        return _series(ser, 0, t2), _series(ser, 1, t2)
+        return _series(ser, _IA, t2), _series(ser, _IB, t2)
     sh = math.sin(0.5 * t) / t
     return math.sin(t) / t, 2.0 * sh * sh
 
 
 @njit(cache=True, inline="always")
-def _coef_D(t, ser, thr):
-    """``D`` alone (the SO(3) dexpinv), same branches and formula as :func:`coefficients`."""
+def coef_ABC(t, ser, thr):
+    """``(A, B, C)``: the SO(3) exponential and ``J_r``. The Horner recurrences run in one
+    loop (independent chains, same arithmetic per chain as :func:`_series`), which hides
+    their latency."""
     if t < thr:
-        return _series(ser, 3, t * t)
+        t2 = t * t
+        m = _n_terms(t2, ser.shape[1])
+        a, b, c = ser[_IA, m - 1], ser[_IB, m - 1], ser[_IC, m - 1]
+        for j in range(m - 2, -1, -1):
+            a = a * t2 + ser[_IA, j]
+            b = b * t2 + ser[_IB, j]
+            c = c * t2 + ser[_IC, j]
+        return a, b, c
+    s = math.sin(t)
+    sh = math.sin(0.5 * t) / t
+    return s / t, 2.0 * sh * sh, (t - s) / (t * t * t)
+
+
+@njit(cache=True, inline="always")
+def coef_ABCB1C1(t, ser, thr):
+    """``(A, B, C, B1, C1)`` with ``B1 = B'/t``, ``C1 = C'/t`` (the s-derivative of
+    ``J_r(theta) theta_s``); one loop of five chains, as :func:`coef_ABC`."""
+    if t < thr:
+        t2 = t * t
+        m = _n_terms(t2, ser.shape[1])
+        a, b, c, b1, c1 = ser[_IA, m - 1], ser[_IB, m - 1], ser[_IC, m - 1], ser[_IB1, m - 1], ser[_IC1, m - 1]
+        for j in range(m - 2, -1, -1):
+            a = a * t2 + ser[_IA, j]
+            b = b * t2 + ser[_IB, j]
+            c = c * t2 + ser[_IC, j]
+            b1 = b1 * t2 + ser[_IB1, j]
+            c1 = c1 * t2 + ser[_IC1, j]
+        return a, b, c, b1, c1
+    s, co = math.sin(t), math.cos(t)
+    sh = math.sin(0.5 * t) / t
+    t2 = t * t
+    return (s / t, 2.0 * sh * sh, (t - s) / (t2 * t), (t * s + 2.0 * co - 2.0) / (t2 * t2),
+            (3.0 * s - 2.0 * t - t * co) / (t2 * t2 * t))
+
+
+@njit(cache=True, inline="always")
+def coef_D(t, ser, thr):
+    """``D = (1 - (t/2) cot(t/2)) / t^2`` alone (the SO(3) dexpinv), same branches and
+    formula as :func:`coefficients`."""
+    if t < thr:
+        return _series(ser, _ID, t * t)
     return (1.0 - 0.5 * t / math.tan(0.5 * t)) / (t * t)
 
 
@@ -244,7 +302,7 @@ def dexpinv_flat(ft, ser, thr, u, w, out, ao):
                 out[a + k] = w[a + k]
         elif kind == KIND_SO3:
             t0, t1, t2 = u[a], u[a + 1], u[a + 2]
-            cD = _coef_D(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
+            cD = coef_D(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
             out[a], out[a + 1], out[a + 2] = _dexpinv3(cD, t0, t1, t2, w[a], w[a + 1], w[a + 2])
         else:
             r0, r1, r2 = u[a], u[a + 1], u[a + 2]

@@ -571,7 +571,7 @@ def diagnostics(pb: BeamProblem, names, points=None) -> dict:
         "momentum": lambda t, y: pb.momentum(y)[0],
         "angular_momentum": lambda t, y: pb.momentum(y)[1],
         "orth_error": lambda t, y: pb.orth_error(y),
-        "reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.reactions(y).values()]),
+        "reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.reactions(y, t).values()]),
     }
     out = {q: table[q] for q in names if q in table}
     if points is not None:

@@ -23,7 +23,7 @@ import numba  # noqa: F401  (a core dependency)
 
 from liegroup_int.integrators import integrate_fixed, resolve_method  # noqa: E402
 from liegroup_int.problems.beam import BeamProblem  # noqa: E402
-from liegroup_int.problems.beam.kernels_numba import NumbaBeamKernels  # noqa: E402
+from liegroup_int.problems.beam.kernels.collocation import NumbaBeamKernels  # noqa: E402
 from liegroup_int.scenes import load_scene  # noqa: E402
 from liegroup_int.scenes.beam import problem  # noqa: E402
 

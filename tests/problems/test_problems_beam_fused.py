@@ -19,7 +19,7 @@ from liegroup_int.integrators import (METHODS, BlowUpError, IntegrationError, Pr
                                       integrate_fixed, resolve_method)
 from liegroup_int.problems.beam import BeamProblem
 from liegroup_int.integrators import stepper_for
-from liegroup_int.problems.beam.kernels_numba import profile_row, profile_value
+from liegroup_int.problems.beam.kernels.profiles import profile_row, profile_value
 from liegroup_int.problems.beam.model import EndLoad, Loads, Profile
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem

@@ -25,7 +25,7 @@ from liegroup_int.integrators import (IntegrationError, Problem, StepSizeError, 
 from liegroup_int.problems.beam import BeamProblem
 from liegroup_int.integrators import stepper_for
 from liegroup_int.integrators.engine import CompiledStepper
-from liegroup_int.problems.beam.kernels_numba import _newton_schulz
+from liegroup_int.groups.kernels_numba import normalize_rotations as _newton_schulz
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
 

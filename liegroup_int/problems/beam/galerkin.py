@@ -33,19 +33,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...groups.so3 import SO3, angle, cross, dexpinv_so3, exp_so3
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
-from ...integrators import Problem
+from .base import SECTION_FIELDS, BeamBase
 from .kinematics import jr_times, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
-from .problem import BeamProblem
 
 #: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
 INTEGRATIONS = ("reduced", "full")
-
-#: Section quantities :meth:`GalerkinBeamProblem.section_fields` computes.
-SECTION_FIELDS = ("Gamma", "K", "N", "M", "n", "m", "velocity", "angular_velocity")
 
 
 @dataclass
@@ -84,7 +80,7 @@ class _GEnd:
         return "start" if self.normal < 0 else "end"
 
 
-class GalerkinBeamProblem(Problem):
+class GalerkinBeamProblem(BeamBase):
     """Explicit RKMK isogeometric Galerkin beam (``space.formulation = "galerkin"``).
 
     Parameters
@@ -109,6 +105,7 @@ class GalerkinBeamProblem(Problem):
 
     formulation = "galerkin"
     mixed = False
+    state_cls = GalerkinBeamState
 
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
@@ -116,17 +113,8 @@ class GalerkinBeamProblem(Problem):
                  kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss-p"):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
-        kelvin_voigt = float(kelvin_voigt)
-        if not (np.isfinite(kelvin_voigt) and kelvin_voigt >= 0.0):
-            raise ValueError(f"kelvin_voigt: expected a retardation time >= 0 [s], got {kelvin_voigt!r}")
-        if backend not in ("numpy", "numba"):
-            raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
-        self.tau = kelvin_voigt
-        self.damping_report = None
+        self._setup(space, constants, bcs, loads, initial, backend, kelvin_voigt)
         self.integration = integration
-        self.space, self.constants = space, constants
-        self.bcs, self.loads, self.initial = bcs, loads, initial
-        self.backend = backend
         self.quadrature = quadrature
         self.gs = GalerkinSpace(space, rule="gauss-full" if integration == "full" else quadrature)
         gs = self.gs
@@ -175,12 +163,6 @@ class GalerkinBeamProblem(Problem):
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
                                    or self.translating_ends or self.point_loads)
-        self._nb_kernels = None
-        if backend == "numba":
-            import importlib.util
-
-            if importlib.util.find_spec("numba") is None:  # pragma: no cover - depends on the environment
-                raise ImportError("backend='numba' needs numba (pip install numba); use backend='numpy'")
 
     @staticmethod
     def _sections(space, constants) -> tuple:
@@ -198,17 +180,10 @@ class GalerkinBeamProblem(Problem):
         """``(a, b, point_a, Q, load)`` of each rigid joint: the control rows of the two
         patch ends, the point at the end of patch ``a``, the relative reference rotation
         ``Q = R0_a^T R0_b`` there and the point load (or None)."""
-        rows = getattr(space, "joints", ())
-        if loads.joints and len(loads.joints) != len(rows):
-            raise ValueError(f"loads.joints: {len(loads.joints)} joint load(s) for {len(rows)} joint(s)")
         out = []
-        for k, (a, b) in enumerate(rows):
-            ld = loads.joints[k] if loads.joints else None
-            if ld is not None and ld.follower:
-                raise ValueError(f"loads.joints[{k}]: a joint load is a dead load (follower = false)")
+        for k, (a, b), ld in self.joint_loads(space, loads):
             pa, pb = self.gs.patch_ends[k][1], self.gs.patch_ends[k + 1][0]
-            Q = self.gs.R0[pa].T @ self.gs.R0[pb]
-            out.append((a, b, pa, Q, ld if ld is not None and ld.active else None))
+            out.append((a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld))
         return tuple(out)
 
     def _joint_residual(self, x: np.ndarray, rotational: bool) -> np.ndarray:
@@ -246,17 +221,14 @@ class GalerkinBeamProblem(Problem):
     # ------------------------------------------------------------------ set-up
     @staticmethod
     def _end(index, point, normal, kind, load, motion, translation):
-        BeamProblem.check_end_load(kind, load, normal)
+        BeamBase.check_end_load(kind, load, normal)
         return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged"),
                      fix_rotation=kind == "clamped", load=load, motion=motion, translation=translation)
 
-    @property
-    def _nb(self):
-        if self._nb_kernels is None and self.backend == "numba":
-            from .galerkin_numba import NumbaGalerkinKernels
+    def _make_kernels(self):
+        from .kernels.galerkin import NumbaGalerkinKernels
 
-            self._nb_kernels = NumbaGalerkinKernels(self)
-        return self._nb_kernels
+        return NumbaGalerkinKernels(self)
 
     def with_kelvin_voigt(self, tau: float) -> "GalerkinBeamProblem":
         """The same problem with damping ``tau`` [s]."""
@@ -272,13 +244,8 @@ class GalerkinBeamProblem(Problem):
 
     def initial_state(self) -> GalerkinBeamState:
         """Reference configuration with the initial velocity field."""
-        sp, gs = self.space, self.gs
-        c = np.array(sp.control_points if hasattr(sp, "patches") else sp.curve.control_points, dtype=float)
-        ic = self.initial
-        omega = np.asarray(ic.omega, float)
-        v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
-                                                     sp.c0 - np.asarray(ic.axis_point, float))
-        v = sp.solve(v_c)  # a rigid velocity field lies in the (rational) trial space
+        gs = self.gs
+        c, v, omega = self._initial_motion()
         w = np.zeros((self.n, 3))
         if np.any(omega):  # material Omega = R0^T omega, projected; exact at the patch ends
             w = gs.project(rot_T(gs.R0, np.broadcast_to(omega, (self.m, 3))))
@@ -288,26 +255,16 @@ class GalerkinBeamProblem(Problem):
                 w[row] = gs.R0[pt].T @ omega
         R = np.array(gs.R0)
         for e in self.ends:
-            if e.fix_position and np.any(v[e.index]):
-                raise ValueError(f"initial: the velocity field moves the supported end at s = "
-                                 f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
+            self._check_initial_end(e, v, omega)
             if e.translation is not None:
                 v[e.index] = e.translation.velocity(0.0) * e.translation.unit_axis
             if e.motion is not None:
-                a = e.motion.unit_axis
-                if np.any(omega) and not np.allclose(omega, e.motion.velocity(0.0) * a, rtol=1e-12, atol=0.0):
-                    raise ValueError("initial.omega: differs from the prescribed rotation rate of the support at t = 0")
-                w[e.index] = e.motion.velocity(0.0) * (gs.R0[e.point].T @ a)
+                w[e.index] = e.motion.velocity(0.0) * (gs.R0[e.point].T @ e.motion.unit_axis)
             elif e.fix_rotation:
-                if np.any(omega):
-                    raise ValueError("initial.omega: a clamped end cannot rotate")
                 w[e.index] = 0.0
         return GalerkinBeamState(c, v, w, R, np.array(gs.K0))
 
     # ------------------------------------------------------------------ RKMK contract
-    def zero_increment(self, y) -> np.ndarray:
-        return np.zeros((4, self.n, 3))
-
     def project_increment(self, u: np.ndarray) -> np.ndarray:
         """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
         and velocity, ``Q^T u_a`` for Theta and W): the increments that keep the members
@@ -325,16 +282,11 @@ class GalerkinBeamProblem(Problem):
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
         u = self.project_increment(u)
         if self._nb is not None:
-            return self._nb.action(u, y)
+            return self._nb.action(u, y, GalerkinBeamState)
         th, th_s = self.B0 @ u[1], self.B1 @ u[1]
         E = exp_so3(th)
         K = rot_T(E, y.K) + jr_times(th, th_s)
         return GalerkinBeamState(y.c + u[0], y.v + u[2], y.w + u[3], y.R @ E, K)
-
-    def end_step(self, y: GalerkinBeamState) -> GalerkinBeamState:
-        """One Newton-Schulz step on the point rotations (as :meth:`BeamProblem.end_step`)."""
-        y.R = SO3.normalize(y.R)
-        return y
 
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Right-trivialized ``dexpinv_{-Theta}`` at the points, projected (``M^-1``)."""
@@ -346,9 +298,6 @@ class GalerkinBeamProblem(Problem):
         """``M^-1 int N values`` with the clamped rows set to ``ends`` rows."""
         rhs = self.B0.T @ (self.wf[:, None] * values)
         return self._constrain(self.mass_theta.solve(rhs, ends[self.fix_rotation]), "theta")
-
-    def vector_field(self, t: float, y: GalerkinBeamState) -> np.ndarray:
-        return self.increment_rate(t, y, np.zeros((4, self.n, 3)))
 
     def increment_rate(self, t: float, y: GalerkinBeamState, u: np.ndarray) -> np.ndarray:
         if self._nb is not None:
@@ -415,23 +364,8 @@ class GalerkinBeamProblem(Problem):
                 T[row] += Re.T @ self._end_couple(ld, t, Re)
         return F, T
 
-    # the spatial end loads at t, dead or turned by the end rotation (follower)
-    _end_force = staticmethod(BeamProblem._end_force)
-    _end_couple = staticmethod(BeamProblem._end_couple)
-
-    def increment_scale(self, y) -> np.ndarray:
-        scale = np.ones((4, self.n, 3))
-        scale[0] = np.abs(y.c)
-        return scale
-
     def rotation_angle(self, u: np.ndarray) -> float:
         return float(np.max(angle(self.B0 @ u[1])))
-
-    def compiled_kernels(self):
-        """The compiled engine's kernels (backend="numba"), else ``None``."""
-        if self._nb is None:
-            return None
-        return self._nb.compiled_problem()
 
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):
@@ -479,9 +413,6 @@ class GalerkinBeamProblem(Problem):
         return p
 
     # ------------------------------------------------------------------ diagnostics
-    def tip(self, y) -> np.ndarray:
-        return y.c[-1].copy()
-
     def energy_parts(self, y, t: float = 0.0) -> dict[str, float]:
         """Kinetic (consistent mass), strain and load-potential energy [J]."""
         kin = 0.5 * (float(np.sum(y.v * (self._M_mu @ y.v)))
@@ -501,14 +432,6 @@ class GalerkinBeamProblem(Problem):
         Gt = rot_T(y.R, self.B1 @ y.c)
         return Gt, self.CN * (Gt - self.gs.gamma0), self.CM * (y.K - self.gs.K0)
 
-    def mechanical_energy(self, y) -> float:
-        p = self.energy_parts(y)
-        return p["kinetic"] + p["strain"]
-
-    def energy(self, y, t: float = 0.0) -> float:
-        p = self.energy_parts(y, t)
-        return p["kinetic"] + p["strain"] + p["potential"]
-
     def momentum(self, y) -> tuple[np.ndarray, np.ndarray]:
         """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
         c, v, Om = self.B0 @ y.c, self.B0 @ y.v, self.B0 @ y.w
@@ -516,17 +439,10 @@ class GalerkinBeamProblem(Problem):
         h = cross(c, self.mu[:, None] * v) + rot(y.R, self.Jm * Om)
         return self.mass_weights @ y.v, np.sum(wf * h, axis=0)
 
-    def orth_error(self, y) -> float:
-        E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)
-        return float(np.sqrt(np.max(np.einsum("nij,nij->n", E, E))))
-
     def section_fields(self, y, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
         """Section quantities at the points (:attr:`frame_points`), ``(m, 3)`` each, as
         :meth:`BeamProblem.section_fields`."""
-        want = set(names)
-        unknown = want - set(SECTION_FIELDS)
-        if unknown:
-            raise ValueError(f"unknown section field(s) {sorted(unknown)}; known: {', '.join(SECTION_FIELDS)}")
+        want = self._check_fields(names)
         out = {}
         Om = self.B0 @ y.w
         if want & {"Gamma", "N", "n", "K", "M", "m"}:
@@ -539,18 +455,9 @@ class GalerkinBeamProblem(Problem):
             out["angular_velocity"] = rot(y.R, Om)
         return {k: out[k] for k in names if k in out}
 
-    def supports(self) -> dict[str, int]:
-        return {e.name: e.index for e in self.ends if e.fix_position}
-
     def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple (spatial) each support exerts on the beam: the residuals of the
         supported rows of the weak form (variationally consistent reactions). A hinge
         takes no couple (zero)."""
         sup = self._support_loads(t, y)
         return {e.name: (sup[e.name][0], y.R[e.point] @ sup[e.name][1]) for e in self.ends if e.fix_position}
-
-    def centreline(self, y, u: np.ndarray) -> np.ndarray:
-        return self.space.point_matrix(u) @ y.c
-
-    def is_finite(self, y) -> bool:
-        return bool(np.all(np.isfinite(y.c)) and np.all(np.isfinite(y.R)))

@@ -24,8 +24,8 @@ def rot(R: np.ndarray, a: np.ndarray) -> np.ndarray:
 def jr_times(theta: np.ndarray, a: np.ndarray) -> np.ndarray:
     """``J_r(theta) a = a - B theta x a + C theta x (theta x a)``, ``(n, 3)``.
 
-    ``J_r(theta) = J_l(-theta) = dexp_{-theta}``: the right-trivialized derivative of exp
-    (method.md section 1).
+    ``J_r(theta) = J_l(-theta) = dexp_{-theta}``: the right-trivialized derivative of exp,
+    ``d/ds exp(hat(theta(s))) = exp(hat(theta)) hat(J_r(theta) theta_s)``.
     """
     B, C = coefficients(angle(theta), "BC")
     ta = cross(theta, a)
@@ -41,8 +41,8 @@ def jr_theta_s_derivative(theta: np.ndarray, theta_s: np.ndarray, theta_ss: np.n
                  + C1 tt theta x (theta x g)
                  + C (g x (theta x g) + theta x (theta x theta_ss))
 
-    ``B1`` and ``C1`` use Taylor series below 1 rad (their closed forms cancel like
-    ``eps / t^4``, method.md section 3b).
+    ``B1`` and ``C1`` use Taylor series below 1 rad (their closed forms lose digits like
+    ``eps / t^4`` at small angles).
     """
     return jr_and_derivative(theta, theta_s, theta_ss)[1]
 
@@ -63,8 +63,8 @@ def curvature_update(R: np.ndarray, K: np.ndarray, K_s: np.ndarray, theta: np.nd
                      theta_s: np.ndarray, theta_ss: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Material curvature and its arc-length derivative after ``R' = exp(hat(theta)) R``.
 
-    Eq. (52) in the corrected form of method.md section 1,
-    ``K' = K + R^T J_r(theta) theta_s``, and its derivative along s (eq. 53),
+    The update of the material curvature under a left rotation increment (docs/theory.md
+    section 6), ``K' = K + R^T J_r(theta) theta_s``, and its derivative along s (eq. 53),
     ``K'_s = K_s - K x (R^T J_r theta_s) + R^T d/ds(J_r theta_s)``
     (using ``dR^T/ds = -hat(K) R^T``).
 

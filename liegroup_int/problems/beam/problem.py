@@ -1,4 +1,4 @@
-"""Geometrically exact beam as an RKMK plugin (method.md sections 2-3).
+"""Geometrically exact beam as an RKMK plugin: explicit isogeometric collocation (docs/theory.md).
 
 State (:class:`BeamState`) at time ``t_n``:
 
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...groups.so3 import SO3, angle, cross, dexpinv_so3, exp_so3
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
-from ...integrators import Problem
+from .base import SECTION_FIELDS, BeamBase
 from .kinematics import curvature_update, jr_times, rot, rot_T, strain_rates, strains
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
 
@@ -55,10 +55,6 @@ class BeamState:
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K, "K_s": self.K_s}
-
-
-#: Section quantities :meth:`BeamProblem.section_fields` computes (``output.fields``).
-SECTION_FIELDS = ("Gamma", "K", "N", "M", "n", "m", "velocity", "angular_velocity")
 
 
 @dataclass(frozen=True)
@@ -110,7 +106,7 @@ def quadrature_weights(space: CollocationSpace, n_gauss: int = 12) -> np.ndarray
     return scipy.linalg.solve(space.N0.T, bj)
 
 
-class BeamProblem(Problem):
+class BeamProblem(BeamBase):
     """Explicit RKMK IGA-C beam (Ferri & Marino), one problem plugin.
 
     Parameters
@@ -125,7 +121,7 @@ class BeamProblem(Problem):
     initial : InitialConditions
     backend : {"numpy", "numba"}
         Stage kernels: NumPy arrays (default) or the compiled kernels of
-        :mod:`.kernels_numba` (same results to round-off; needs numba).
+        :mod:`.kernels.collocation` (same results to round-off; needs numba).
     kelvin_voigt : float
         Retardation time ``tau >= 0`` [s] of an optional Kelvin-Voigt (strain-rate)
         damping: the resultants become ``n = R C_N (Gamma + tau dGamma/dt)`` and
@@ -147,6 +143,8 @@ class BeamProblem(Problem):
         collocation rows. ``K_s`` is then carried but never read.
     """
 
+    state_cls = BeamState
+
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
@@ -155,14 +153,7 @@ class BeamProblem(Problem):
             raise ValueError(f"formulation: expected one of {', '.join(FORMULATIONS)}, got {formulation!r}")
         self.formulation = formulation
         self.mixed = formulation == "mixed"
-        kelvin_voigt = float(kelvin_voigt)
-        if not (np.isfinite(kelvin_voigt) and kelvin_voigt >= 0.0):
-            raise ValueError(f"kelvin_voigt: expected a retardation time >= 0 [s], got {kelvin_voigt!r}")
-        self.tau = kelvin_voigt
-        #: :class:`~.damping.DampingReport` when ``tau`` was sized automatically
-        self.damping_report = None
-        self.space, self.constants = space, constants
-        self.bcs, self.loads, self.initial = bcs, loads, initial
+        self._setup(space, constants, bcs, loads, initial, backend, kelvin_voigt)
         n = space.n_ctrl
         self.n = n
         self.CN, self.CM, self.mu, self.Jm = self._section_arrays(space, constants)
@@ -191,27 +182,11 @@ class BeamProblem(Problem):
                                    or self.translating_ends or any(
             (e.force_neumann and np.any(e.load.force)) or (e.moment_neumann and np.any(e.load.couple))
             for e in self.neumann_ends) or any(j.load is not None for j in self.joints))
-        # --- backend selection (compiled kernels: kernels_numba.py) -------------------
-        if backend not in ("numpy", "numba"):
-            raise ValueError(f"backend must be 'numpy' or 'numba', got {backend!r}")
-        self.backend = backend
-        self._nb_kernels = None
-        if backend == "numba":
-            import importlib.util
 
-            if importlib.util.find_spec("numba") is None:  # pragma: no cover - depends on the environment
-                raise ImportError("backend='numba' needs numba (pip install numba); use backend='numpy'")
-        # --- end backend selection ----------------------------------------------------
+    def _make_kernels(self):
+        from .kernels.collocation import NumbaBeamKernels
 
-    @property
-    def _nb(self):
-        """The compiled kernels' data and wrappers (backend="numba"), built at first use:
-        checking a scene (building its problem) imports no numba."""
-        if self._nb_kernels is None and self.backend == "numba":
-            from .kernels_numba import NumbaBeamKernels
-
-            self._nb_kernels = NumbaBeamKernels(self)
-        return self._nb_kernels
+        return NumbaBeamKernels(self)
 
     def with_kelvin_voigt(self, tau: float) -> "BeamProblem":
         """The same problem (space, data, backend, formulation) with damping ``tau`` [s]."""
@@ -225,17 +200,6 @@ class BeamProblem(Problem):
         return self.space.u_c, self.space.N0, self.space.s_c
 
     # ------------------------------------------------------------------ set-up
-    @staticmethod
-    def check_end_load(kind: str, load, normal: float) -> None:
-        """Refuse a load a support would take: any load on a clamped end, a force on a
-        hinged one (``normal`` -1 at s = 0, +1 at s = L; shared by every formulation)."""
-        where = "start" if normal < 0 else "end"
-        if kind == "clamped" and load.active:
-            raise ValueError(f"loads.{where}: a load on a clamped end does no work; remove it or free the end")
-        if kind == "hinged" and np.any(load.force):
-            raise ValueError(f"loads.{where}.force: a force on a hinged end is taken by the support; remove it "
-                             "or free the end")
-
     @staticmethod
     def _end(index, normal, kind, load, l_s, motion=None, translation=None):
         BeamProblem.check_end_load(kind, load, normal)
@@ -279,18 +243,8 @@ class BeamProblem(Problem):
     @staticmethod
     def _joints(space, loads) -> tuple:
         """The rigid joints of a :class:`~liegroup_int.iga.PatchedSpace` (none for one patch)."""
-        rows = getattr(space, "joints", ())
-        if loads.joints and len(loads.joints) != len(rows):
-            raise ValueError(f"loads.joints: {len(loads.joints)} joint load(s) for {len(rows)} joint(s)")
-        out = []
-        for k, (a, b) in enumerate(rows):
-            ld = loads.joints[k] if loads.joints else None
-            if ld is not None and ld.follower:
-                raise ValueError(f"loads.joints[{k}]: a joint load is a dead load (follower = false)")
-            pa, pb = space.patches[k], space.patches[k + 1]
-            out.append(_Joint(a, b, C_STAR / pa.l_s_end, C_STAR / pb.l_s_start,
-                              ld if ld is not None and ld.active else None))
-        return tuple(out)
+        return tuple(_Joint(a, b, C_STAR / space.patches[k].l_s_end, C_STAR / space.patches[k + 1].l_s_start, ld)
+                     for k, (a, b), ld in BeamBase.joint_loads(space, loads))
 
     def _dirichlet_mask(self) -> np.ndarray:
         """Boolean ``(n, 4)``: which (row, field) right-hand sides are prescribed rates
@@ -305,35 +259,20 @@ class BeamProblem(Problem):
 
     def initial_state(self) -> BeamState:
         """Reference configuration with the initial velocity field."""
-        sp = self.space
-        c = np.array(sp.control_points if hasattr(sp, "patches") else sp.curve.control_points, dtype=float)
-        ic = self.initial
-        omega = np.asarray(ic.omega, float)
-        v_c = np.asarray(ic.velocity, float) + cross(np.broadcast_to(omega, sp.c0.shape),
-                                                     sp.c0 - np.asarray(ic.axis_point, float))
-        v = sp.solve(v_c)
+        c, v, omega = self._initial_motion()
         w = np.tile(omega, (self.n, 1))
-        R = np.array(sp.R0)
+        R = np.array(self.space.R0)
         for e in self.ends:  # supports do not move, unless prescribed
-            if e.fix_position and np.any(v[e.index]):
-                raise ValueError(f"initial: the velocity field moves the supported end at s = "
-                                 f"{'0' if e.normal < 0 else 'L'}; put initial.axis_point on the support")
+            self._check_initial_end(e, v, omega)
             if e.translation is not None:  # prescribed displacement d(t) a: d(0) = 0 for both kinds
                 v[e.index] = e.translation.velocity(0.0) * e.translation.unit_axis
             if e.motion is not None:
                 a = e.motion.unit_axis
-                if np.any(omega) and not np.allclose(omega, e.motion.velocity(0.0) * a, rtol=1e-12, atol=0.0):
-                    raise ValueError("initial.omega: differs from the prescribed rotation rate of the support at t = 0")
                 w[e.index] = e.motion.velocity(0.0) * a
                 R[e.index] = exp_so3(e.motion.angle(0.0) * a) @ R[e.index]
-            elif e.fix_rotation and np.any(omega):
-                raise ValueError("initial.omega: a clamped end cannot rotate")
         return BeamState(c, v, w, R, np.array(self.K0), np.array(self.K0_s))
 
     # ------------------------------------------------------------------ RKMK contract
-    def zero_increment(self, y) -> np.ndarray:
-        return np.zeros((4, self.n, 3))
-
     def action(self, u: np.ndarray, y: BeamState) -> BeamState:
         if self._nb is not None:  # backend="numba"
             return self._nb.action(u, y, BeamState)
@@ -345,16 +284,6 @@ class BeamProblem(Problem):
             K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, self.N2 @ th)
         return BeamState(y.c + u[0], y.v + u[2], y.w + u[3], exp_so3(th_c) @ y.R, K, K_s)
 
-    def end_step(self, y: BeamState) -> BeamState:
-        """One Newton-Schulz step toward the nearest rotation, ``R <- R (3 I - R^T R) / 2``.
-
-        ``R = exp(hat(theta)) R_n`` is orthogonal up to round-off, but the round-off
-        accumulates (measured ~6e-12 after 2e5 steps); the correction is quadratic in the
-        orthogonality error, so it changes R by ~1e-24 and keeps it at ~1e-15 for ever.
-        """
-        y.R = SO3.normalize(y.R)
-        return y
-
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
         """``dexpinv`` on control values: pointwise at the collocation points on the
         rotational component, then projected back with ``M_c^-1``."""
@@ -363,37 +292,15 @@ class BeamProblem(Problem):
         out[1] = self.space.solve(dexpinv_so3(th_c, self.N0 @ w[1]))
         return out
 
-    def vector_field(self, t: float, y: BeamState) -> np.ndarray:
-        """``f(t, y)`` as control values (no dexpinv): the stage rate at ``u = 0``."""
-        if self._nb is not None:  # backend="numba"
-            return self._nb.vector_field(t, y)
-        return self._solve(self._rates(t, y, np.zeros((self.n, 3))))
-
     def increment_rate(self, t: float, y: BeamState, u: np.ndarray) -> np.ndarray:
         if self._nb is not None:  # backend="numba"
             return self._nb.increment_rate(t, y, u)
         return self._solve(self._rates(t, y, self.N0 @ u[1]))
 
-    def increment_scale(self, y: BeamState) -> np.ndarray:
-        scale = np.ones((4, self.n, 3))
-        scale[0] = np.abs(y.c)
-        return scale
-
     def rotation_angle(self, u: np.ndarray) -> float:
         if self._nb is not None:  # backend="numba"
             return self._nb.rotation_angle(u)
         return float(np.max(angle(self.N0 @ u[1])))
-
-    def compiled_kernels(self):
-        """The compiled engine's kernels (backend="numba" only): stage rates, action,
-        Newton-Schulz end step, rotation angle and error scale of
-        :mod:`.kernels_numba`, so that the drivers run all the steps between two output
-        times in one compiled call. ``None`` with the NumPy backend, and when a load
-        profile is not a plain :class:`Profile` (the generic path then calls it in
-        Python)."""
-        if self._nb is None:
-            return None
-        return self._nb.compiled_problem(BeamState)
 
     # ------------------------------------------------------------------ stage kernels
     def _solve(self, rhs: np.ndarray) -> np.ndarray:
@@ -481,18 +388,6 @@ class BeamProblem(Problem):
             for f, val in ((0, 0.5 * (rhs[a, 0] + rhs[b, 0])), (1, 0.5 * (rhs[a, 1] + rhs[b, 1])), (2, lin), (3, ang)):
                 rhs[a, f] = rhs[b, f] = val
 
-    @staticmethod
-    def _end_force(ld, t: float, R_end: np.ndarray) -> np.ndarray:
-        """Spatial end force at ``t``: dead, or turned by the end rotation (follower)."""
-        f = np.asarray(ld.force, float) * ld.force_profile(t)
-        return R_end @ f if ld.follower else f
-
-    @staticmethod
-    def _end_couple(ld, t: float, R_end: np.ndarray) -> np.ndarray:
-        """Spatial end couple at ``t``: dead, or turned by the end rotation (follower)."""
-        m = np.asarray(ld.couple, float) * ld.couple_profile(t)
-        return R_end @ m if ld.follower else m
-
     def _add_strain_rates(self, y, R, K, c_s, c_ss, w_c, gam, gam_s, KM, KM_s):
         """``(Gamma, Gamma_s, K_M, K_M,s) + tau * d/dt(...)`` at the collocation points.
 
@@ -551,10 +446,6 @@ class BeamProblem(Problem):
         return p
 
     # ------------------------------------------------------------------ diagnostics
-    def tip(self, y: BeamState) -> np.ndarray:
-        """Centroid at ``s = L`` (last control point of an open knot vector), ``(3,)``."""
-        return y.c[-1].copy()
-
     def energy_parts(self, y: BeamState, t: float = 0.0) -> dict[str, float]:
         """Kinetic, strain and load-potential energy [J] at time ``t`` by collocation
         quadrature (the distributed-load potential uses the load profile at ``t``)."""
@@ -577,30 +468,12 @@ class BeamProblem(Problem):
                 potential -= float(np.dot(ld.force, y.c[j.a]))
         return {"kinetic": float(self.quad @ kin), "strain": float(self.quad @ strain), "potential": potential}
 
-    def mechanical_energy(self, y: BeamState) -> float:
-        """Kinetic plus strain energy [J]; minus the work of the loads
-        (:meth:`quadrature_rate` integrated in time) it is conserved."""
-        p = self.energy_parts(y)
-        return p["kinetic"] + p["strain"]
-
-    def energy(self, y: BeamState, t: float = 0.0) -> float:
-        """Total energy at time ``t``: kinetic + strain + distributed-load potential (with
-        its profile at ``t``) - work of constant end forces (end couples and time-varying
-        end loads are not included; with time-varying loads it is not conserved)."""
-        p = self.energy_parts(y, t)
-        return p["kinetic"] + p["strain"] + p["potential"]
-
     def momentum(self, y: BeamState) -> tuple[np.ndarray, np.ndarray]:
         """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
         c_c, v_c, w_c = self.N0 @ y.c, self.N0 @ y.v, self.N0 @ y.w
         p = self.mu * v_c
         h = cross(c_c, p) + rot(y.R, self.Jm * rot_T(y.R, w_c))
         return self.quad @ p, self.quad @ h
-
-    def orth_error(self, y: BeamState) -> float:
-        """Largest ``|R^T R - I|`` (Frobenius) over the collocation points."""
-        E = np.swapaxes(y.R, -1, -2) @ y.R - np.eye(3)
-        return float(np.sqrt(np.max(np.einsum("nij,nij->n", E, E))))
 
     def section_fields(self, y: BeamState, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
         """Section quantities at the collocation points, ``(n, 3)`` each, only those in
@@ -613,10 +486,7 @@ class BeamProblem(Problem):
           ``s' < s`` by the part ``s' > s``);
         * ``velocity``, ``angular_velocity``: spatial, at the points.
         """
-        want = set(names)
-        unknown = want - set(SECTION_FIELDS)
-        if unknown:
-            raise ValueError(f"unknown section field(s) {sorted(unknown)}; known: {', '.join(SECTION_FIELDS)}")
+        want = self._check_fields(names)
         out: dict[str, np.ndarray] = {}
         R = y.R
         need_strain = want & {"Gamma", "N", "n", "K", "M", "m"}
@@ -637,11 +507,7 @@ class BeamProblem(Problem):
             out["angular_velocity"] = self.N0 @ y.w
         return {k: out[k] for k in names if k in out}
 
-    def supports(self) -> dict[str, int]:
-        """The supported ends (clamped or hinged): ``{"start" | "end": collocation index}``."""
-        return {("start" if e.normal < 0 else "end"): e.index for e in self.ends if e.fix_position}
-
-    def reactions(self, y: BeamState) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    def reactions(self, y: BeamState, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple the supports exert on the beam, ``{"start" | "end": (f (3,),
         c (3,))}``: the end resultants with the outward normal, ``f = nu n``, ``c = nu m``
         (``nu = -1`` at ``s = 0``, ``+1`` at ``s = L``), from :meth:`section_fields` at the end
@@ -650,10 +516,3 @@ class BeamProblem(Problem):
         f = self.section_fields(y, ("n", "m"))
         return {("start" if e.normal < 0 else "end"): (e.normal * f["n"][e.index], e.normal * f["m"][e.index])
                 for e in self.ends if e.fix_position}
-
-    def centreline(self, y: BeamState, u: np.ndarray) -> np.ndarray:
-        """Centroid positions at parameters ``u``, ``(m, 3)``."""
-        return self.space.point_matrix(u) @ y.c
-
-    def is_finite(self, y: BeamState) -> bool:
-        return bool(np.all(np.isfinite(y.c)) and np.all(np.isfinite(y.R)))

@@ -1,0 +1,412 @@
+"""Compiled kernels of the Galerkin beam (``GalerkinBeamProblem(..., backend="numba")``),
+built from :mod:`.physics`.
+
+Same mathematics as the NumPy path of :mod:`..galerkin`, one loop over the points per call:
+
+* :func:`action`: ``Theta, Theta_s`` at every point from the control values,
+  ``R <- R exp(hat(Theta))``, ``K <- exp(-Theta) K + J_r(Theta) Theta_s``; ``c, v, w`` plus
+  their increments.
+* :func:`rates`: strains, resultants, the weak-form forces and the projected
+  ``dexpinv`` scattered onto the control values in the same loop, end loads, then the
+  banded Cholesky solves with the supported rows prescribed and the joints' constraints;
+  returns the power of the loads and supports minus the dissipation.
+
+The data: :class:`GalerkinData`, packed by :func:`.adapters.pack`. ``loads`` holds the
+loads at the stage time: row :data:`Q` (the distributed load's profile in its first
+entry), :data:`MD` (distributed couple), per end ``e`` rows ``ACC + 2 e`` (prescribed
+acceleration) and ``ALPHA + 2 e`` (prescribed material angular acceleration), per loaded
+point ``l`` rows ``POINTS + 2 l`` (force) and ``POINTS + 2 l + 1`` (couple).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from ....groups.kernels_numba import coef_ABC, coef_D, series_table
+from ....groups.so3_coefficients import TAYLOR_THRESHOLD
+from . import adapters as ad
+from .adapters import c64, f1, f2, f3, f4, fs, i1, i2, is_
+from .band import basis_windows, chol_solve, window, window2
+from .physics import (
+    curvature_rate,
+    dexpinv,
+    dissipation,
+    exp_rows,
+    gamma_rate,
+    gyroscopic,
+    jr_times,
+    load_power,
+    point_load,
+    resultant,
+    rows_T_times,
+    strain,
+)
+from .profiles import LoadTable, set_loads
+from .vec3 import add, axpy, cross, dot, neg, norm, put, rot, rot_T, row, scale, sub
+
+FM = {"contract"}
+Q, MD, ACC, ALPHA, POINTS = 0, 1, 2, 3, 6  # rows of ``loads`` (module docstring)
+
+
+class GalerkinData(NamedTuple):
+    """Constant data and work arrays of the Galerkin kernels (``n`` control values, ``m``
+    points)."""
+
+    band: np.ndarray  # (2, m, p + 1) basis windows B0, B1
+    j0: np.ndarray  # (m,)
+    wf: np.ndarray  # (m,) weights of the bending (full) and axial (reduced) quadratures
+    wa: np.ndarray
+    gamma0: np.ndarray  # (m, 3)
+    K0: np.ndarray
+    CN: np.ndarray  # (m, 3) section per point
+    CM: np.ndarray
+    J: np.ndarray
+    lv: np.ndarray  # (n, 3) distributed load vector int N q ds
+    U: np.ndarray  # (5, q + 1, n) Cholesky factors of mu M, M, J_1 M, J_2 M, J_3 M
+    Cp: np.ndarray  # (n, kp) mass columns of the supported position rows fp
+    Cth: np.ndarray  # (n, kr) and of the supported rotation rows fr (M, then J_d M)
+    Crot: np.ndarray  # (3, n, kr)
+    fp: np.ndarray
+    fr: np.ndarray
+    ser: np.ndarray
+    thr: float
+    tau: float
+    power: bool
+    has_q: bool
+    has_m: bool
+    loads: np.ndarray  # (rows, 3) at the stage time (module docstring)
+    end_index: np.ndarray  # (2,) control row, moving support, sliding support
+    end_moving: np.ndarray
+    end_sliding: np.ndarray
+    point_row: np.ndarray  # (nl,) loaded points: control row, point, has force, has couple,
+    point_pt: np.ndarray  # follower
+    point_force: np.ndarray
+    point_couple: np.ndarray
+    point_follower: np.ndarray
+    joint_ab: np.ndarray  # (J, 2) rows of each rigid joint, Q = R0_a^T R0_b (J, 3, 3)
+    joint_q: np.ndarray
+    Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
+    Sinv: np.ndarray  # (3, 3 J, 3 J)
+    keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
+    jr: np.ndarray  # (3 J,) work
+
+
+@njit(cache=True, inline="always")
+def unpack(flat, head):
+    """The :class:`GalerkinData` of :func:`.adapters.pack`'s arrays (views)."""
+    return GalerkinData(
+        f3(flat, head, 0), i1(flat, head, 1), f1(flat, head, 2), f1(flat, head, 3), f2(flat, head, 4),
+        f2(flat, head, 5), f2(flat, head, 6), f2(flat, head, 7), f2(flat, head, 8), f2(flat, head, 9),
+        f3(flat, head, 10), f2(flat, head, 11), f2(flat, head, 12), f3(flat, head, 13), i1(flat, head, 14),
+        i1(flat, head, 15), f2(flat, head, 16), fs(flat, head, 17), fs(flat, head, 18), is_(flat, head, 19) != 0,
+        is_(flat, head, 20) != 0, is_(flat, head, 21) != 0, f2(flat, head, 22), i1(flat, head, 23),
+        i1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27), i1(flat, head, 28),
+        i1(flat, head, 29), i1(flat, head, 30), i2(flat, head, 31), f3(flat, head, 32), f4(flat, head, 33),
+        f3(flat, head, 34), f2(flat, head, 35), f1(flat, head, 36))
+
+
+# ====================================================================== action
+@njit(cache=True, fastmath=FM, _nrt=False)
+def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
+    """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2``."""
+    d = unpack(flat, head)
+    for j in range(c.shape[0]):
+        for q in range(3):
+            c2[j, q] = c[j, q] + u[0, j, q]
+            v2[j, q] = v[j, q] + u[2, j, q]
+            w2[j, q] = w[j, q] + u[3, j, q]
+    u1 = u[1]
+    for i in range(R.shape[0]):
+        th, ts = window2(d.band, i, d.j0, u1, 0)
+        cA, cB, cC = coef_ABC(norm(th), d.ser, d.thr)
+        E = exp_rows(cA, cB, th)
+        for a in range(3):  # R2[i] = R[i] E
+            r = (R[i, a, 0], R[i, a, 1], R[i, a, 2])
+            R2[i, a, 0], R2[i, a, 1], R2[i, a, 2] = rows_T_times(E, r)
+        put(K2, i, add(rows_T_times(E, row(K, i)), jr_times(cB, cC, th, ts)))
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def rotation_angle(u, flat, head):
+    """Largest ``|Theta|`` at the points of the increment ``u``."""
+    d = unpack(flat, head)
+    best, u1 = 0.0, u[1]
+    for i in range(d.band.shape[1]):
+        a = norm(window(d.band, 0, i, d.j0, u1, 0))
+        if a > best or a != a:
+            best = a
+    return best
+
+
+# ====================================================================== stage rates
+@njit(cache=True, fastmath=FM, inline="always")
+def _point_forces(d, i, c, v, w, R, K, u1):
+    """The weak-form terms of point ``i``: the weighted ``dexpinv_{-Theta} Omega``, torque
+    ``p``, moment ``M`` and spatial force ``n``, and the power at the point."""
+    wfi, wai, tau, B, j0 = d.wf[i], d.wa[i], d.tau, d.band, d.j0
+    zero = (0.0, 0.0, 0.0)
+    th = Om = cs = Oms = vs = dth = p = Mw = nw = zero
+    power = 0.0
+    if wfi != 0.0 or tau > 0.0:
+        th, Om = window(B, 0, i, j0, u1, 0), window(B, 0, i, j0, w, 0)
+    if wai != 0.0 or tau > 0.0:
+        cs = window(B, 1, i, j0, c, 0)
+    if tau > 0.0:
+        Oms, vs = window(B, 1, i, j0, w, 0), window(B, 1, i, j0, v, 0)
+    if wfi != 0.0:
+        k = row(K, i)
+        dth = scale(wfi, dexpinv(coef_D(norm(th), d.ser, d.thr), neg(th), Om))
+        kd = curvature_rate(Oms, k, Om) if tau > 0.0 else zero
+        M = resultant(row(d.CM, i), strain(k, row(d.K0, i)), tau, kd)
+        p = scale(-wfi, add(cross(M, k), gyroscopic(Om, row(d.J, i))))
+        if d.has_m:  # R^T m_d
+            z = rot_T(R, i, row(d.loads, MD))
+            p = axpy(wfi, z, p)
+            power += wfi * dot(z, Om)
+        if tau > 0.0:
+            power -= wfi * dissipation(tau, row(d.CM, i), kd)
+        Mw = scale(wfi, M)
+    if wai != 0.0:
+        Gt = rot_T(R, i, cs)
+        gd = gamma_rate(rot_T(R, i, vs), Om, Gt) if tau > 0.0 else zero
+        N = resultant(row(d.CN, i), strain(Gt, row(d.gamma0, i)), tau, gd)
+        p = axpy(wai, cross(Gt, N), p)
+        nw = scale(wai, rot(R, i, N))
+        if tau > 0.0:
+            power -= wai * dissipation(tau, row(d.CN, i), gd)
+    return dth, p, Mw, nw, power
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _point_loads(d, v, w, R, out):
+    """Distributed force and the loads of the loaded points into ``out``; their power."""
+    power = 0.0
+    if d.has_q:
+        fq = d.loads[Q, 0]
+        for j in range(v.shape[0]):
+            f = scale(fq, row(d.lv, j))
+            put(out[2], j, add(row(out[2], j), f))
+            power += dot(f, row(v, j))
+    for l in range(d.point_row.shape[0]):
+        idx, pt, fol = d.point_row[l], d.point_pt[l], d.point_follower[l]
+        f = point_load(R, pt, row(d.loads, POINTS + 2 * l), fol) if d.point_force[l] else (0.0, 0.0, 0.0)
+        m = row(d.loads, POINTS + 2 * l + 1)  # material: R^T C, follower: C
+        m = (m if fol else rot_T(R, pt, m)) if d.point_couple[l] else (0.0, 0.0, 0.0)
+        put(out[2], idx, add(row(out[2], idx), f))
+        put(out[3], idx, add(row(out[3], idx), m))
+        power += load_power(f, row(v, idx), m, row(w, idx))
+    return power
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def _prescribe(b, C, rows, vals, q):
+    """Move the prescribed values ``vals[:, q]`` of ``rows`` to the right-hand side of
+    column ``q``: ``b[:, q] -= C vals[:, q]``, then ``b[rows, q] = vals[:, q]``."""
+    for k in range(rows.shape[0]):
+        x = vals[k, q]
+        if x != 0.0:
+            for j in range(b.shape[0]):
+                b[j, q] -= C[j, k] * x
+    for k in range(rows.shape[0]):
+        b[rows[k], q] = vals[k, q]
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def _constrain(x, jab, jq, Y, Sinv, rotational, r):
+    """``x <- x - Y S^-1 C x`` (rigid joints: ``x[b] = Q^T x[a]``, or ``x[b] = x[a]``)."""
+    nj = jab.shape[0]
+    for j in range(nj):
+        a, b = jab[j, 0], jab[j, 1]
+        xa = row(x, a)
+        ta = rot_T(jq, j, xa) if rotational else xa
+        r[3 * j], r[3 * j + 1], r[3 * j + 2] = x[b, 0] - ta[0], x[b, 1] - ta[1], x[b, 2] - ta[2]
+    for l in range(3 * nj):
+        lam = 0.0
+        for q in range(3 * nj):
+            lam += Sinv[l, q] * r[q]
+        if lam != 0.0:
+            for i in range(x.shape[0]):
+                for q in range(3):
+                    x[i, q] -= lam * Y[l, i, q]
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _solve(d, w, out):
+    """Supported rows' forces into ``keep``, prescribed values, then the three mass solves
+    with the joints' constraints."""
+    keep, fp, fr = d.keep, d.fp, d.fr
+    kp, kr = fp.shape[0], fr.shape[0]
+    for k in range(kp):
+        put(keep, k, row(out[2], fp[k]))
+        put(keep, 8 + k, row(d.loads, ACC + 2 * (0 if fp[k] == 0 else 1)))
+    for k in range(kr):  # Theta' = W (parallel) at a clamp; prescribed angular accelerations
+        put(keep, 2 + k, row(out[3], fr[k]))
+        put(keep, 4 + k, row(w, fr[k]))
+        put(keep, 6 + k, row(d.loads, ALPHA + 2 * (0 if fr[k] == 0 else 1)))
+    for q in range(3):
+        _prescribe(out[1], d.Cth, fr, keep[4:4 + kr], q)
+    chol_solve(d.U[1], out[1], 0, 3)
+    _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
+    for q in range(3):
+        _prescribe(out[3], d.Crot[q], fr, keep[6:6 + kr], q)
+        chol_solve(d.U[2 + q], out[3], q, 1)
+    _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
+    for q in range(3):
+        _prescribe(out[2], d.Cp, fp, keep[8:8 + kp], q)
+    chol_solve(d.U[0], out[2], 0, 3)
+    _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _column_dot(C, k, x, q):
+    """``C[:, k] . x[:, q]``."""
+    s = 0.0
+    for j in range(x.shape[0]):
+        s += C[j, k] * x[j, q]
+    return s
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _support_power(d, v, w, out):
+    """Moving supports: the reaction (the residual of the supported row) times the
+    prescribed velocity."""
+    power = 0.0
+    for e in range(d.end_index.shape[0]):
+        idx = d.end_index[e]
+        for k in range(d.fp.shape[0]):
+            if d.end_sliding[e] and d.fp[k] == idx:
+                for q in range(3):
+                    power += (_column_dot(d.Cp, k, out[2], q) - d.keep[k, q]) * v[idx, q]
+        for k in range(d.fr.shape[0]):
+            if d.end_moving[e] and d.fr[k] == idx:
+                for q in range(3):
+                    power += (_column_dot(d.Crot[q], k, out[3], q) - d.keep[2 + k, q]) * w[idx, q]
+    return power
+
+
+@njit(cache=True, fastmath=FM, _nrt=False)
+def rates(c, v, w, R, K, u, out, flat, head):
+    """Stage rate ``(4, n, 3)`` into ``out`` (the loads at the stage time already in the
+    data); returns the power of the loads and supports minus the dissipation when the
+    problem computes it, else 0."""
+    d = unpack(flat, head)
+    B, j0, u1 = d.band, d.j0, u[1]
+    for j in range(v.shape[0]):
+        for q in range(3):
+            out[0, j, q], out[1, j, q], out[2, j, q], out[3, j, q] = v[j, q], 0.0, 0.0, 0.0
+    o1, o2, o3 = out[1], out[2], out[3]
+    power = 0.0
+    for i in range(R.shape[0]):
+        if d.wf[i] == 0.0 and d.wa[i] == 0.0:
+            continue
+        dth, p, Mw, nw, pi = _point_forces(d, i, c, v, w, R, K, u1)
+        power += pi
+        js = j0[i]
+        for k in range(B.shape[2]):
+            j, b0, b1 = js + k, B[0, i, k], B[1, i, k]
+            put(o1, j, axpy(b0, dth, row(o1, j)))
+            put(o2, j, axpy(-b1, nw, row(o2, j)))
+            put(o3, j, add(row(o3, j), sub(scale(b0, p), scale(b1, Mw))))
+    power += _point_loads(d, v, w, R, out)
+    _solve(d, w, out)
+    if not d.power:
+        return 0.0
+    return power + _support_power(d, v, w, out)
+
+
+# ====================================================================== engine kernels
+# data = (flat, head, load rows, load vectors, encoded profiles)
+@njit(cache=True, inline="always")
+def engine_rate(data, t, y, u, out):
+    set_loads(unpack(data[0], data[1]).loads, data[2], data[3], data[4], t)
+    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0], data[1])
+
+
+@njit(cache=True, inline="always")
+def engine_action(data, u, y0, y1):
+    action(u, y0[0], y0[1], y0[2], y0[3], y0[4], y1[0], y1[1], y1[2], y1[3], y1[4], data[0], data[1])
+
+
+@njit(cache=True, inline="always")
+def engine_angle(data, u):
+    return rotation_angle(u, data[0], data[1])
+
+
+ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, engine_angle, 5)
+STATE_FIELDS = ("c", "v", "w", "R", "K")
+
+
+# ====================================================================== Python side
+def _end_loads(pb, loads: np.ndarray, table: LoadTable) -> dict:
+    """The end fields of :class:`GalerkinData`; the supports' accelerations into ``loads``."""
+    for e_i, e in enumerate(pb.ends):
+        if e.translation is not None:
+            s, prof = e.translation.acceleration_profile()
+            table.add_or_fix(loads, ACC + 2 * e_i, s * e.translation.unit_axis, prof)
+        if e.motion is not None:
+            s, prof = e.motion.acceleration_profile()
+            table.add_or_fix(loads, ALPHA + 2 * e_i, s * (pb.gs.R0[e.point].T @ e.motion.unit_axis), prof)
+    return {"end_index": np.array([e.index for e in pb.ends], dtype=np.int64),
+            "end_moving": np.array([e.motion is not None for e in pb.ends], dtype=np.int64),
+            "end_sliding": np.array([e.translation is not None for e in pb.ends], dtype=np.int64)}
+
+
+def _point_data(pb, loads: np.ndarray, table: LoadTable) -> dict:
+    """The loaded points' fields of :class:`GalerkinData`; their loads into ``loads``."""
+    pls = pb.point_loads
+    for k, (_, _, ld) in enumerate(pls):
+        table.add_or_fix(loads, POINTS + 2 * k, ld.force, ld.force_profile)
+        table.add_or_fix(loads, POINTS + 2 * k + 1, ld.couple, ld.couple_profile)
+    cols = [(row, point, bool(np.any(ld.force)), bool(np.any(ld.couple)), bool(ld.follower))
+            for row, point, ld in pls]
+    arr = np.array(cols, dtype=np.int64).reshape(len(pls), 5)
+    return {f"point_{name}": np.ascontiguousarray(arr[:, k])
+            for k, name in enumerate(("row", "pt", "force", "couple", "follower"))}
+
+
+def _joint_data(pb) -> dict:
+    """The rigid joints' fields of :class:`GalerkinData`."""
+    n, nj = pb.n, len(pb.joints)
+    if nj:
+        cons = [pb._constraints[k] for k in ("position", "theta", "rotation")]
+        Y, Sinv = np.array([c[0] for c in cons]), np.array([c[1] for c in cons])
+    else:
+        Y, Sinv = np.zeros((3, 0, n, 3)), np.zeros((3, 0, 0))
+    return {"joint_ab": np.array([(j[0], j[1]) for j in pb.joints], dtype=np.int64).reshape(nj, 2),
+            "joint_q": np.array([j[3] for j in pb.joints], dtype=float).reshape(nj, 3, 3),
+            "Y": c64(Y), "Sinv": c64(Sinv), "keep": np.zeros((10, 3)), "jr": np.zeros(3 * nj)}
+
+
+def galerkin_data(pb):
+    """``(GalerkinData, LoadTable)`` of a :class:`~..galerkin.GalerkinBeamProblem`."""
+    gs, n = pb.gs, pb.n
+    band, j0 = basis_windows([gs.B0, gs.B1], pb.space.degree + 1)
+    loads, table = np.zeros((POINTS + 2 * len(pb.point_loads), 3)), LoadTable()
+    table.add_or_fix(loads, Q, (1.0, 0.0, 0.0), pb.loads.distributed_profile)
+    table.add_or_fix(loads, MD, pb.m_dist, pb.loads.distributed_profile)
+    masses = (pb.mass_position, pb.mass_theta) + tuple(pb.mass_rotation)
+    fp = np.flatnonzero(pb.mass_position.fixed).astype(np.int64)
+    fr = np.flatnonzero(pb.mass_theta.fixed).astype(np.int64)
+    data = GalerkinData(
+        band, j0, c64(gs.w_full), c64(gs.w_axial), c64(gs.gamma0), c64(gs.K0), c64(pb.CN), c64(pb.CM),
+        c64(pb.Jm), c64(pb.load_vector), c64([mm.factor for mm in masses]), c64(pb.mass_position.coupling),
+        c64(pb.mass_theta.coupling), c64(np.array([mm.coupling for mm in pb.mass_rotation]).reshape(3, n, fr.size)),
+        fp, fr, series_table(), float(TAYLOR_THRESHOLD), float(pb.tau), bool(pb.has_quadrature), bool(pb.has_q),
+        bool(pb.has_m), loads, **_end_loads(pb, loads, table), **_point_data(pb, loads, table), **_joint_data(pb))
+    return data, table
+
+
+class NumbaGalerkinKernels(ad.KernelSet):
+    """The compiled kernels of one :class:`~..galerkin.GalerkinBeamProblem`."""
+
+    data_cls, fields = GalerkinData, STATE_FIELDS
+
+    def __init__(self, pb):
+        data, table = galerkin_data(pb)
+        super().__init__(data, table, pb.n)
+
+    def kernels(self) -> tuple:
+        return action, rates, rotation_angle, ENGINE_KERNELS

@@ -1,0 +1,141 @@
+"""Inline 3-vector and 3x3 helpers of the beam kernels: vectors are 3-tuples of floats.
+
+Every helper is ``inline="always"``: numba inlines it into the calling kernel before
+LLVM sees the code, so it compiles to the same straight-line instructions as written-out
+component code (with the caller's fast-math flags) and costs nothing.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def cross(a, b):
+    """``a x b``."""
+    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, inline="always")
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def add(a, b):
+    return a[0] + b[0], a[1] + b[1], a[2] + b[2]
+
+
+@njit(cache=True, inline="always")
+def sub(a, b):
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
+
+
+@njit(cache=True, inline="always")
+def neg(a):
+    return -a[0], -a[1], -a[2]
+
+
+@njit(cache=True, inline="always")
+def scale(s, a):
+    """``s a`` for a scalar ``s``."""
+    return s * a[0], s * a[1], s * a[2]
+
+
+@njit(cache=True, inline="always")
+def axpy(s, a, b):
+    """``b + s a``."""
+    return b[0] + s * a[0], b[1] + s * a[1], b[2] + s * a[2]
+
+
+@njit(cache=True, inline="always")
+def mul(a, b):
+    """Componentwise ``a * b`` (a diagonal matrix times a vector)."""
+    return a[0] * b[0], a[1] * b[1], a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def div(a, b):
+    """Componentwise ``a / b``."""
+    return a[0] / b[0], a[1] / b[1], a[2] / b[2]
+
+
+@njit(cache=True, inline="always")
+def wdot(c, a):
+    """``a . diag(c) a``."""
+    return c[0] * a[0] * a[0] + c[1] * a[1] * a[1] + c[2] * a[2] * a[2]
+
+
+@njit(cache=True, inline="always")
+def row(A, i):
+    """``A[i, 0:3]`` of an ``(n, 3)`` array."""
+    return A[i, 0], A[i, 1], A[i, 2]
+
+
+@njit(cache=True, inline="always")
+def put(A, i, a):
+    """``A[i, 0:3] = a``."""
+    A[i, 0], A[i, 1], A[i, 2] = a[0], a[1], a[2]
+
+
+@njit(cache=True, inline="always")
+def put_at(A, i, q, a):
+    """``A[i, q:q+3] = a``."""
+    A[i, q], A[i, q + 1], A[i, q + 2] = a[0], a[1], a[2]
+
+
+@njit(cache=True, inline="always")
+def rot(R, i, a):
+    """``R[i] a`` of an ``(n, 3, 3)`` array of rotations."""
+    return (R[i, 0, 0] * a[0] + R[i, 0, 1] * a[1] + R[i, 0, 2] * a[2],
+            R[i, 1, 0] * a[0] + R[i, 1, 1] * a[1] + R[i, 1, 2] * a[2],
+            R[i, 2, 0] * a[0] + R[i, 2, 1] * a[1] + R[i, 2, 2] * a[2])
+
+
+@njit(cache=True, inline="always")
+def rot_T(R, i, a):
+    """``R[i]^T a``."""
+    return (R[i, 0, 0] * a[0] + R[i, 1, 0] * a[1] + R[i, 2, 0] * a[2],
+            R[i, 0, 1] * a[0] + R[i, 1, 1] * a[1] + R[i, 2, 1] * a[2],
+            R[i, 0, 2] * a[0] + R[i, 1, 2] * a[1] + R[i, 2, 2] * a[2])
+
+
+@njit(cache=True, inline="always")
+def norm(a):
+    return math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+
+
+# symmetric 3x3 matrices as 6-tuples (s00, s01, s02, s11, s12, s22)
+@njit(cache=True, inline="always")
+def _inertia_entry(R, i, J, a, b):
+    return R[i, a, 0] * J[0] * R[i, b, 0] + R[i, a, 1] * J[1] * R[i, b, 1] + R[i, a, 2] * J[2] * R[i, b, 2]
+
+
+@njit(cache=True, inline="always")
+def inertia(R, i, J):
+    """The spatial inertia ``R[i] diag(J) R[i]^T`` (symmetric)."""
+    return (_inertia_entry(R, i, J, 0, 0), _inertia_entry(R, i, J, 0, 1), _inertia_entry(R, i, J, 0, 2),
+            _inertia_entry(R, i, J, 1, 1), _inertia_entry(R, i, J, 1, 2), _inertia_entry(R, i, J, 2, 2))
+
+
+@njit(cache=True, inline="always")
+def sym_times(S, a):
+    return (S[0] * a[0] + S[1] * a[1] + S[2] * a[2], S[1] * a[0] + S[3] * a[1] + S[4] * a[2],
+            S[2] * a[0] + S[4] * a[1] + S[5] * a[2])
+
+
+@njit(cache=True, inline="always")
+def sym_add(S, T):
+    return S[0] + T[0], S[1] + T[1], S[2] + T[2], S[3] + T[3], S[4] + T[4], S[5] + T[5]
+
+
+@njit(cache=True, inline="always")
+def sym_solve(S, b):
+    """``S^-1 b`` by cofactors."""
+    s00, s01, s02, s11, s12, s22 = S
+    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    return scale(1.0 / det, sym_times((c00, c01, c02, c11, c12, c22), b))
