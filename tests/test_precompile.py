@@ -28,7 +28,7 @@ def _family(scene_name: str) -> str:
     scene = load_scene(scene_name)
     if scene.kind != "beam":
         return "rigid_body"
-    return "beam_galerkin" if scene["space.formulation"] == "galerkin" else "beam"
+    return f"beam_{scene['space.formulation']}"
 
 
 @pytest.mark.parametrize("scene_name", sorted(builtin_descriptions()))

@@ -1,7 +1,7 @@
 """The cantilever set-up timed by ``benchmarks/beam_backends.py`` and ``stage_flops.py``.
 
-The built-in ``cantilever`` at p = 4 with ``n_ctrl`` control points, RKMK4, started from a
-smooth deformed and moving state (:func:`start_state`): from rest, with the tiny steps
+The built-in ``cantilever`` at p = 4 with ``n_ctrl`` control points (primal collocation),
+RKMK4, started from a smooth deformed and moving state (:func:`start_state`): from rest, with the tiny steps
 large meshes need, the far field underflows to subnormal numbers during the first hundreds
 of steps and subnormal arithmetic slows every backend by ~2x on x86. The step
 ``dt = 0.3e-6 (31 / n)^2`` (:func:`step_dt`) is below the stability limit at every size
@@ -22,10 +22,11 @@ from .timing import best_of
 TAB = resolve_method("rkmk4")
 
 
-def cantilever(n: int, backend: str = "numba"):
-    """The built-in cantilever, p = 4, ``n_ctrl = n``, with the given stage backend."""
+def cantilever(n: int, backend: str = "numba", formulation: str = "primal"):
+    """The built-in cantilever, p = 4, ``n_ctrl = n``, with the given stage backend, in primal
+    collocation unless ``formulation`` says otherwise (the benchmarks count per collocation point)."""
     return scene_problem(load_scene("cantilever", {"space.n_ctrl": n, "space.degree": 4,
-                                                   "integrator.backend": backend}))
+                                                   "integrator.backend": backend, "space.formulation": formulation}))
 
 
 def start_state(pb):

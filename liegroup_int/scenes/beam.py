@@ -89,9 +89,10 @@ KEYS = {
         Key("integrator.backend", "str", "numba", "stage kernels: compiled (numba) or plain NumPy",
             choices=("numba", "numpy")),
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
-        Key("space.formulation", "str", "primal",
-            "balance laws: the paper's primal collocation, the locking-free mixed one (resultant splines), or the "
-            "weak form (galerkin: energy-conserving by construction)",
+        Key("space.formulation", "str", "galerkin",
+            "balance laws: the weak form (galerkin, the default: energy-conserving, locking-free, no spurious "
+            "growing mode), the paper's primal collocation (primal), or the locking-free mixed collocation "
+            "(resultant splines)",
             choices=("primal", "mixed", "galerkin")),
         Key("space.quadrature", "str", "gauss-p",
             "quadrature rule of the galerkin stiffness (gauss-p: p Gauss points per knot interval for every term, "

@@ -19,8 +19,10 @@ EI_ROLLUP = problem(load_scene("rollup")).constants.CM[1]  # E I2 of the rollup 
 
 
 def _rollup_arc(n_ctrl, tau):
-    """Half-circle roll-up state (static arc of curvature pi, dead end couple pi EI / L)."""
+    """Half-circle roll-up state (static arc of curvature pi, dead end couple pi EI / L), primal
+    collocation (the formulation whose spurious modes the damping removes)."""
     pb = problem(load_scene("rollup", {"space.n_ctrl": n_ctrl, "integrator.backend": "numpy",
+                                       "space.formulation": "primal",
                                        "loads.end.couple": [0.0, 0.0, np.pi * EI_ROLLUP],
                                        "loads.end.profile": "constant", "material.kelvin_voigt": tau}))
     sp, k = pb.space, np.pi
@@ -54,7 +56,8 @@ def test_rollup_arc_spurious_growth_removed_by_kelvin_voigt():
 def test_strain_rates_are_time_derivatives_of_the_strains():
     # the tau-part of the resultants is tau * d/dt of (Gamma, Gamma_s, K - K0, K_s - K0_s)
     # along the flow (central differences, O(h^2): measured 1.3e-9 relative at h = 1e-5)
-    sc = load_scene("spinning_helix", {"integrator.backend": "numpy", "material.kelvin_voigt": 1.0})
+    sc = load_scene("spinning_helix", {"integrator.backend": "numpy", "material.kelvin_voigt": 1.0,
+                                       "space.formulation": "primal"})
     pb = problem(sc)
     rng = np.random.default_rng(3)
     u = 1e-1 * rng.standard_normal((4, pb.n, 3))

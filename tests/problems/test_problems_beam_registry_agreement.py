@@ -9,10 +9,14 @@ its NumPy twin shares space, data and the sized retardation time.
 Fixed steps: 5 RKMK4 steps at the scene's own step (its stable step where the scene says
 ``dt = "auto"``) from a deformed moving state, fused compiled loop (no monitor) against the
 NumPy backend's generic loop. Tolerance ``TOL_STEPS = 1e-11`` of the field scale (largest
-magnitude of the field over both results): the reasoning of
-``test_problems_beam_backends.py`` (the NumPy path reproduces itself after 5 steps only to
-~3e-12 on ``v`` when ``|lambda| dt`` is near the stability limit, as it is for the stiff
-scenes); measured here <= 3e-12 on every scene and both start times.
+magnitude of the field over both results), or twice the NumPy path's own reproducibility
+when that is larger: the reasoning of ``test_problems_beam_backends.py`` (the NumPy path
+reproduces itself after 5 steps, ``c`` perturbed by 1e-16 relative, only to ~3e-12 on
+``v`` when ``|lambda| dt`` is near the stability limit, as it is for the stiff scenes).
+The long spin_up arm (10 m, EA = 2.8e7 N, |lambda| dt = 2.26) reproduces itself only to
+1.6e-11 .. 2.6e-11 of the ``v`` scale (Galerkin, t0 = 0 and 0.1 s), and the backends
+differ there by 1.0e-11 and 7.5e-12, at the free-end control points and identically with
+the hub motion switched off. Measured <= 3e-12 on the other scenes.
 
 Adaptive steps: the compiled adaptive loop (numba, ``monitor=None``) against the NumPy
 backend's generic adaptive loop, RKMK4(5) at rtol 1e-5 capped by the scene's stable step
@@ -147,8 +151,12 @@ def test_fused_rkmk4_steps_agree_with_the_numpy_backend(scene_pair, t0, advance_
     a, b = stats["numba"], stats["numpy"]
     assert (a.steps, a.rhs_evals) == (b.steps, b.rhs_evals) == (5, 5 * RK4.stages)
     assert a.quadrature == pytest.approx(b.quadrature, rel=TOL_WORK, abs=1e-300)
+    y1 = y0.copy()  # the NumPy path's own reproducibility: c perturbed by 1e-16 relative
+    y1.c = y1.c * (1.0 + 1.1e-16 * np.sign(np.random.default_rng(3).standard_normal(y1.c.shape)))
+    self_err = _field_errors(integrate_fixed(npb, RK4, (t0, t0 + 5 * dt), y1, dt, monitor=None)[1], res["numpy"])
     for f, (err, scale) in _field_errors(res["numba"], res["numpy"]).items():
-        assert err <= TOL_STEPS * scale, f"{name} t0={t0}: {f} differs by {err:.3e} (scale {scale:.3e})"
+        tol = max(TOL_STEPS * scale, 2.0 * self_err[f][0])
+        assert err <= tol, f"{name} t0={t0}: {f} differs by {err:.3e} (scale {scale:.3e}, tolerance {tol:.3e})"
     # not a vacuous comparison: the 5 steps changed the velocities by far more than the tolerance
     moved = np.max(np.abs(res["numpy"].v - y0.v))
     assert moved > 1e-3 * np.max(np.abs(res["numpy"].v)), f"{name}: the state did not move"

@@ -92,12 +92,12 @@ def test_bad_toml_file(tmp_path, capsys):
 
 
 def test_blow_up_exits_3_and_keeps_history(tmp_path, capsys):
-    # the cantilever at 1.1x its stable RK4 step (|lambda| h = 3.1 > 2.83) diverges; the
-    # divergence is caught (rotation guard or non-finite state) and the rows written
-    # before it stay on disk
+    # the cantilever (default Galerkin, |lambda|max = 1.809e6 1/s) at 1.1x its stable RK4
+    # step (|lambda| h = 3.1 > 2.83) diverges; the divergence is caught (measured: the
+    # energy balance at the first output, 1.72e-5 s) and the rows written before it stay on disk
     out = tmp_path / "boom"
-    rc = main(["run", "cantilever", "--out", str(out), "--quiet", "--set", "integrator.dt=1.3e-6",
-               "--set", "t_end=0.01", "--set", "output.every=1.3e-5", "--set", "guard.dt=false"])
+    rc = main(["run", "cantilever", "--out", str(out), "--quiet", "--set", "integrator.dt=1.72e-6",
+               "--set", "t_end=0.01", "--set", "output.every=1.72e-5", "--set", "guard.dt=false"])
     err = capsys.readouterr().err
     # caught by the energy balance (or, if it grows between two outputs, the rotation guard or
     # the non-finite check); the diagnosis names the step as the cause, measured at the last
@@ -165,25 +165,27 @@ def test_converge_and_sweep_commands(tmp_path, capsys):
 
 
 def test_validate_spectrum_flags_a_spurious_growing_mode(capsys):
-    # cantilever at rest: p = 4, n_ctrl = 31 has a purely imaginary spectrum (measured max
-    # Re lambda 2.8e-8 1/s, FD noise, at |lambda|max 2.4e6); p = 8, n_ctrl = 61 has a
-    # spurious growing mode of +1.3e4 1/s (docs/verification.md), 650 e-folds over 0.05 s
-    assert main(["validate", "cantilever", "--spectrum"]) == 0
+    # primal collocation of the cantilever at rest: p = 4, n_ctrl = 31 has a purely imaginary
+    # spectrum (measured max Re lambda 2.8e-8 1/s, FD noise, at |lambda|max 2.4e6); p = 8,
+    # n_ctrl = 61 has a spurious growing mode of +1.3e4 1/s (docs/verification.md), 650
+    # e-folds over 0.05 s
+    primal = ["--set", "space.formulation=primal"]
+    assert main(["validate", "cantilever", "--spectrum", *primal]) == 0
     out, err = capsys.readouterr()
     # |lambda|max as printed, against the NumPy eigenvalues of the same problem (an
     # independent path: dense Jacobian of the NumPy backend), to the printed 4 digits
     lam_cli = float(out.split("|lambda|max = ")[1].split()[0])
-    pb = problem(load_scene("cantilever", {"integrator.backend": "numpy"}))
+    pb = problem(load_scene("cantilever", {"integrator.backend": "numpy", "space.formulation": "primal"}))
     lam_np = float(np.abs(eigenvalues(pb, 0.0, pb.initial_state())).max())
     assert lam_cli == pytest.approx(lam_np, rel=1e-3) and "stable dt rkmk4" in out and "warning" not in err
-    undamped = ["--set", "space.degree=8", "--set", "space.n_ctrl=61", "--set", "material.kelvin_voigt=0"]
+    undamped = [*primal, "--set", "space.degree=8", "--set", "space.n_ctrl=61", "--set", "material.kelvin_voigt=0"]
     assert main(["validate", "cantilever", "--spectrum", *undamped]) == 0
     out, err = capsys.readouterr()
     assert err.startswith("warning:") and "spurious" in err and err.count("\n") == 1
     growth = float(out.split("max Re lambda = ")[1].split()[0])
     assert growth > 1e3
     # the scene's own kelvin_voigt = "auto" sizes the damping that removes it
-    assert main(["validate", "cantilever", "--spectrum", *undamped[:4]]) == 0
+    assert main(["validate", "cantilever", "--spectrum", *undamped[:6]]) == 0
     out, err = capsys.readouterr()
     assert "kelvin_voigt = auto: tau = " in out and "warning" not in err
     assert float(out.split("spectrum at t=0")[1].split("max Re lambda = ")[1].split()[0]) <= 1e-2
