@@ -70,7 +70,8 @@ def views(cls, flat: np.ndarray, head: np.ndarray, like):
         o = int(head[_HW * k])
         src = head if _is_int(a) else flat
         v = src[o:o + a.size].reshape(a.shape)
-        out.append(v if a.ndim else v[()])
+        data_field = like[k]
+        out.append(v if a.ndim else type(data_field)(v[()]))
     return cls(*out)
 
 
@@ -256,5 +257,5 @@ class KernelSet:
         def unpack_state(arrays):
             return state_cls(*arrays)
 
-        return CompiledProblem(self.kernels()[3], (self.flat.copy(), self.head, *enc), lambda packed: 12 * n,
-                               pack_state, unpack_state)
+        data = views(self.data_cls, self.flat.copy(), self.head, self._like)
+        return CompiledProblem(self.kernels()[3], (data, *enc), lambda packed: 12 * n, pack_state, unpack_state)

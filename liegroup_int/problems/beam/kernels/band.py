@@ -131,12 +131,12 @@ def window(B, f, i, j0, X, q):
 
 
 @njit(cache=True, inline="always")
-def window2(B, i, j0, X, q):
-    """:func:`window` of basis matrices 0 and 1 together (one pass over ``X``)."""
+def window2(B, f, g, i, j0, X, q):
+    """:func:`window` of basis matrices ``f`` and ``g`` together (one pass over ``X``)."""
     s0 = s1 = s2 = t0 = t1 = t2 = 0.0
     js = j0[i]
     for k in range(B.shape[2]):
-        a, b = B[0, i, k], B[1, i, k]
+        a, b = B[f, i, k], B[g, i, k]
         x0, x1, x2 = X[js + k, q], X[js + k, q + 1], X[js + k, q + 2]
         s0 += a * x0
         s1 += a * x1
@@ -145,6 +145,26 @@ def window2(B, i, j0, X, q):
         t1 += b * x1
         t2 += b * x2
     return (s0, s1, s2), (t0, t1, t2)
+
+
+@njit(cache=True, inline="always")
+def window3(B, i, j0, X, q):
+    """:func:`window` of basis matrices 0, 1 and 2 together (one pass over ``X``)."""
+    s0 = s1 = s2 = t0 = t1 = t2 = r0 = r1 = r2 = 0.0
+    js = j0[i]
+    for k in range(B.shape[2]):
+        a, b, c = B[0, i, k], B[1, i, k], B[2, i, k]
+        x0, x1, x2 = X[js + k, q], X[js + k, q + 1], X[js + k, q + 2]
+        s0 += a * x0
+        s1 += a * x1
+        s2 += a * x2
+        t0 += b * x0
+        t1 += b * x1
+        t2 += b * x2
+        r0 += c * x0
+        r1 += c * x1
+        r2 += c * x2
+    return (s0, s1, s2), (t0, t1, t2), (r0, r1, r2)
 
 
 @njit(cache=True, inline="always")

@@ -32,7 +32,7 @@ from ....groups.kernels_numba import coef_ABC, coef_ABCB1C1, coef_D
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
 from .adapters import c64, f1, f2, f3, fs, i1, is_
-from .band import basis_windows, factor_mc, forward_row, solve_cols, window, window2
+from .band import basis_windows, factor_mc, forward_row, solve_cols, window, window2, window3
 from .physics import (
     dexpinv,
     dissipation,
@@ -150,16 +150,13 @@ def _rotate_left(R, R2, i, E):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
+def action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, d):
     """``Lambda(u, y)`` into ``c2, v2, w2, R2, K2, Ks2``, with the curvature derivative
     update ``K_s <- K_s - K x x + R^T d/ds(J_r theta_s)``, ``x = R^T J_r theta_s``."""
-    d = unpack(flat, head)
     _translate(u, c, v, w, c2, v2, w2)
     u1 = u[1]
     for i in range(c.shape[0]):
-        th = window(d.band, 0, i, d.j0, u1, 0)
-        ts = window(d.band, 1, i, d.j0, u1, 0)
-        tss = window(d.band, 2, i, d.j0, u1, 0)
+        th, ts, tss = window3(d.band, i, d.j0, u1, 0)
         cA, cB, cC, cB1, cC1 = coef_ABCB1C1(norm(th), d.ser, d.thr)
         _rotate_left(R, R2, i, exp_rows(cA, cB, th))
         x = rot_T(R, i, jr_times(cB, cC, th, ts))
@@ -169,14 +166,13 @@ def action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
+def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, d):
     """The action without the curvature derivative (the mixed balance laws do not read
     ``K_s``, carried unchanged)."""
-    d = unpack(flat, head)
     _translate(u, c, v, w, c2, v2, w2)
     u1 = u[1]
     for i in range(c.shape[0]):
-        th, ts = window2(d.band, i, d.j0, u1, 0)
+        th, ts = window2(d.band, 0, 1, i, d.j0, u1, 0)
         cA, cB, cC = coef_ABC(norm(th), d.ser, d.thr)
         _rotate_left(R, R2, i, exp_rows(cA, cB, th))
         put(K2, i, add(row(K, i), rot_T(R, i, jr_times(cB, cC, th, ts))))
@@ -184,9 +180,8 @@ def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
-def rotation_angle(u, flat, head):
+def rotation_angle(u, d):
     """``max_i |(N0 u[1])_i|`` (NaN wins, as ``np.max``)."""
-    d = unpack(flat, head)
     best, u1 = 0.0, u[1]
     for i in range(u.shape[1]):
         a = norm(window(d.band, 0, i, d.j0, u1, 0))
@@ -256,8 +251,8 @@ def _balance_row(d, i, R, N, M, ns, tq, vc, wc, th):
 def _primal_rates(d, i, v, w, R, K, cs, css, wc, Omega, Gt):
     """Kelvin-Voigt: the material strain rates and their s-derivatives ``(dGamma,
     dGamma_s, dK, dK_s)`` (``dR^T/ds = -hat(K) R^T``)."""
-    vs, vss = window(d.band, 1, i, d.j0, v, 0), window(d.band, 2, i, d.j0, v, 0)
-    ws, wss = window(d.band, 1, i, d.j0, w, 0), window(d.band, 2, i, d.j0, w, 0)
+    vs, vss = window2(d.band, 1, 2, i, d.j0, v, 0)
+    ws, wss = window2(d.band, 1, 2, i, d.j0, w, 0)
     gd = gamma_rate(rot_T(R, i, vs), Omega, Gt)
     h = sub(sub(vss, cross(ws, cs)), cross(wc, css))
     gds = sub(rot_T(R, i, h), cross(K, gd))
@@ -271,7 +266,7 @@ def _primal_point(d, i, c, v, w, R, K, Ks, u1):
     """Resultants ``N, M``, ``n_s``, torque, ``v_c, w_c, theta_c`` and the dissipation at
     point ``i`` (primal: analytic s-derivatives of the pointwise resultants)."""
     B, j0 = d.band, d.j0
-    cs, css = window(B, 1, i, j0, c, 0), window(B, 2, i, j0, c, 0)
+    cs, css = window2(B, 1, 2, i, j0, c, 0)
     vc, wc, th = window(B, 0, i, j0, v, 0), window(B, 0, i, j0, w, 0), window(B, 0, i, j0, u1, 0)
     k, CN, CM = row(K, i), row(d.CN, i), row(d.CM, i)
     Gt = rot_T(R, i, cs)
@@ -292,10 +287,9 @@ def _primal_point(d, i, c, v, w, R, K, Ks, u1):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def rates_primal(c, v, w, R, K, Ks, u, out, flat, head):
+def rates_primal(c, v, w, R, K, Ks, u, out, d):
     """Stage rate ``M_c^-1 rhs`` of the primal formulation into ``out`` ``(4, n, 3)``
     (``u``: the stage increment; zeros for the plain vector field); returns the power."""
-    d = unpack(flat, head)
     fused = d.minv.shape[0] == 0 and d.joint_a.shape[0] == 0
     power = 0.0
     u1 = u[1]
@@ -335,11 +329,10 @@ def _mixed_point(d, i, c, v, w, R, K):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def rates_mixed(c, v, w, R, K, Ks, u, out, flat, head):
+def rates_mixed(c, v, w, R, K, Ks, u, out, d):
     """Stage rate of the mixed formulation: pass 1 interpolates the pointwise resultants
     by splines (one ``M_c`` solve, its forward sweep fused), pass 2 takes their
     s-derivatives ``N1 n_hat, N1 m_hat`` in the balance laws."""
-    d = unpack(flat, head)
     n, B, j0 = c.shape[0], d.band, d.j0
     banded = d.minv.shape[0] == 0
     fused = banded and d.joint_a.shape[0] == 0
@@ -422,42 +415,61 @@ def _solve_rhs(d, out, forward_done):
             out[f, i, 0], out[f, i, 1], out[f, i, 2] = x[i, 3 * f], x[i, 3 * f + 1], x[i, 3 * f + 2]
 
 
+# ====================================================================== entries from Python
+# (the data as two arrays: one numba call costs ~0.1 us per array, ~5 us per NamedTuple of arrays)
+@njit(cache=True, _nrt=False)
+def call_action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
+    action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
+    action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_rates_primal(c, v, w, R, K, Ks, u, out, flat, head):
+    return rates_primal(c, v, w, R, K, Ks, u, out, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_rates_mixed(c, v, w, R, K, Ks, u, out, flat, head):
+    return rates_mixed(c, v, w, R, K, Ks, u, out, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_angle(u, flat, head):
+    return rotation_angle(u, unpack(flat, head))
+
 # ====================================================================== engine kernels
-# data = (flat, head, load rows, load vectors, encoded profiles) (NumbaBeamKernels.compiled_problem)
-@njit(cache=True, inline="always")
-def _engine_loads(data, t):
-    flat, head = data[0], data[1]
-    set_loads(unpack(flat, head).loads, data[2], data[3], data[4], t)
-
-
+# data = (CollocationData of views, load rows, load vectors, encoded profiles)
+# (ad.KernelSet.compiled_problem)
 @njit(cache=True, inline="always")
 def engine_rate(data, t, y, u, out):
     """Stage rate at ``(t, y)`` with increment ``u`` into ``out``; returns the power."""
-    _engine_loads(data, t)
-    return rates_primal(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0], data[1])
+    set_loads(data[0].loads, data[1], data[2], data[3], t)
+    return rates_primal(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_rate_mixed(data, t, y, u, out):
-    _engine_loads(data, t)
-    return rates_mixed(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0], data[1])
+    set_loads(data[0].loads, data[1], data[2], data[3], t)
+    return rates_mixed(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_action(data, u, y0, y1):
-    action_primal(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5],
-                  data[0], data[1])
+    action_primal(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_action_mixed(data, u, y0, y1):
-    action_mixed(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5],
-                 data[0], data[1])
+    action_mixed(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_angle(data, u):
-    return rotation_angle(u, data[0], data[1])
+    return rotation_angle(u, data[0])
 
 
 #: The engine's kernels, one set per formulation (a run compiles its own formulation only).
@@ -522,7 +534,7 @@ def collocation_data(pb, solver: str = "auto"):
     from ....groups.kernels_numba import series_table
 
     n = pb.n
-    lower, upper = pb.space.bandwidths
+    lower, upper = (int(b) for b in pb.space.bandwidths)
     lu, minv, name = _solver(pb, solver)
     band, j0 = basis_windows([pb.N0, pb.N1, pb.N2])
     ne, nj = len(pb.ends), len(pb.joints)
@@ -572,8 +584,8 @@ class NumbaBeamKernels(ad.KernelSet):
 
     def kernels(self) -> tuple:
         if self.mixed:
-            return action_mixed, rates_mixed, rotation_angle, ENGINE_KERNELS_MIXED
-        return action_primal, rates_primal, rotation_angle, ENGINE_KERNELS
+            return call_action_mixed, call_rates_mixed, call_angle, ENGINE_KERNELS_MIXED
+        return call_action_primal, call_rates_primal, call_angle, ENGINE_KERNELS
 
     def solve(self, x):
         """``M_c^-1`` on an increment-shaped array ``(4, n, 3)`` (copy)."""

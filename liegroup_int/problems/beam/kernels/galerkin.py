@@ -110,9 +110,8 @@ def unpack(flat, head):
 
 # ====================================================================== action
 @njit(cache=True, fastmath=FM, _nrt=False)
-def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
+def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, d):
     """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2``."""
-    d = unpack(flat, head)
     for j in range(c.shape[0]):
         for q in range(3):
             c2[j, q] = c[j, q] + u[0, j, q]
@@ -120,7 +119,7 @@ def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
             w2[j, q] = w[j, q] + u[3, j, q]
     u1 = u[1]
     for i in range(R.shape[0]):
-        th, ts = window2(d.band, i, d.j0, u1, 0)
+        th, ts = window2(d.band, 0, 1, i, d.j0, u1, 0)
         cA, cB, cC = coef_ABC(norm(th), d.ser, d.thr)
         E = exp_rows(cA, cB, th)
         for a in range(3):  # R2[i] = R[i] E
@@ -130,9 +129,8 @@ def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
-def rotation_angle(u, flat, head):
+def rotation_angle(u, d):
     """Largest ``|Theta|`` at the points of the increment ``u``."""
-    d = unpack(flat, head)
     best, u1 = 0.0, u[1]
     for i in range(d.band.shape[1]):
         a = norm(window(d.band, 0, i, d.j0, u1, 0))
@@ -288,11 +286,10 @@ def _support_power(d, v, w, out):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def rates(c, v, w, R, K, u, out, flat, head):
+def rates(c, v, w, R, K, u, out, d):
     """Stage rate ``(4, n, 3)`` into ``out`` (the loads at the stage time already in the
     data); returns the power of the loads and supports minus the dissipation when the
     problem computes it, else 0."""
-    d = unpack(flat, head)
     B, j0, u1 = d.band, d.j0, u[1]
     for j in range(v.shape[0]):
         for q in range(3):
@@ -317,22 +314,37 @@ def rates(c, v, w, R, K, u, out, flat, head):
     return power + _support_power(d, v, w, out)
 
 
+# ====================================================================== entries from Python
+@njit(cache=True, _nrt=False)
+def call_action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
+    action(u, c, v, w, R, K, c2, v2, w2, R2, K2, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_rates(c, v, w, R, K, u, out, flat, head):
+    return rates(c, v, w, R, K, u, out, unpack(flat, head))
+
+
+@njit(cache=True, _nrt=False)
+def call_angle(u, flat, head):
+    return rotation_angle(u, unpack(flat, head))
+
 # ====================================================================== engine kernels
-# data = (flat, head, load rows, load vectors, encoded profiles)
+# data = (GalerkinData of views, load rows, load vectors, encoded profiles)
 @njit(cache=True, inline="always")
 def engine_rate(data, t, y, u, out):
-    set_loads(unpack(data[0], data[1]).loads, data[2], data[3], data[4], t)
-    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0], data[1])
+    set_loads(data[0].loads, data[1], data[2], data[3], t)
+    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_action(data, u, y0, y1):
-    action(u, y0[0], y0[1], y0[2], y0[3], y0[4], y1[0], y1[1], y1[2], y1[3], y1[4], data[0], data[1])
+    action(u, y0[0], y0[1], y0[2], y0[3], y0[4], y1[0], y1[1], y1[2], y1[3], y1[4], data[0])
 
 
 @njit(cache=True, inline="always")
 def engine_angle(data, u):
-    return rotation_angle(u, data[0], data[1])
+    return rotation_angle(u, data[0])
 
 
 ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, engine_angle, 5)
@@ -409,4 +421,4 @@ class NumbaGalerkinKernels(ad.KernelSet):
         super().__init__(data, table, pb.n)
 
     def kernels(self) -> tuple:
-        return action, rates, rotation_angle, ENGINE_KERNELS
+        return call_action, call_rates, call_angle, ENGINE_KERNELS
