@@ -37,7 +37,7 @@ import numpy as np
 from liegroup_int.integrators import eigenvalues, integrate_fixed, jacobian, resolve_method, spectral_radius
 from liegroup_int.bench.table import parser
 from liegroup_int.iga.quadrature import RULES
-from liegroup_int.problems.beam.galerkin_linear import energy_nullity, natural_frequencies
+from liegroup_int.problems.beam.galerkin_linear import distinct_frequencies, energy_nullity, natural_frequencies
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
 from liegroup_int.scenes.schema import SceneError
@@ -49,17 +49,6 @@ def galerkin(scene: str, rule: str, p: int, n: int, backend: str = "numba", **ex
     return problem(load_scene(scene, {"space.formulation": "galerkin", "space.quadrature": rule,
                                       "space.degree": p, "space.n_ctrl": n, "integrator.backend": backend,
                                       **extra}))
-
-
-def distinct_frequencies(w: np.ndarray, k: int) -> np.ndarray:
-    """The ``k`` smallest distinct frequencies above 1 rad/s (pairs of equal bending
-    frequencies of a symmetric section counted once)."""
-    w = np.sort(w[w > 1.0])
-    out = [w[0]]
-    for x in w[1:]:
-        if x > out[-1] * (1 + 1e-6):
-            out.append(x)
-    return np.array(out[:k])
 
 
 def spectrum_table(rules, degrees, sizes, ref: np.ndarray) -> None:

@@ -14,7 +14,7 @@ import numpy as np
 
 from ...iga.galerkin import reference_strain_jacobian
 
-__all__ = ["energy_nullity", "natural_frequencies", "strain_operator"]
+__all__ = ["distinct_frequencies", "energy_nullity", "natural_frequencies", "strain_operator"]
 
 
 def strain_operator(pb) -> np.ndarray:
@@ -56,3 +56,14 @@ def natural_frequencies(pb) -> np.ndarray:
     K = (S.T @ S)[np.ix_(free, free)]
     w2 = scipy.linalg.eigh(K, M[np.ix_(free, free)], eigvals_only=True)
     return np.sqrt(np.clip(w2, 0.0, None))
+
+
+def distinct_frequencies(w: np.ndarray, k: int) -> np.ndarray:
+    """The ``k`` smallest distinct frequencies above 1 rad/s of ``w`` (pairs of equal bending
+    frequencies of a symmetric section counted once: relative gap above 1e-6)."""
+    w = np.sort(w[w > 1.0])
+    out = [w[0]]
+    for x in w[1:]:
+        if x > out[-1] * (1 + 1e-6):
+            out.append(x)
+    return np.array(out[:k])
