@@ -168,18 +168,27 @@ def _new_state6(data, y):
 
 
 @njit(cache=True, inline="always")
+def _copy(src, dst):
+    """``dst <- src`` for C-contiguous arrays of one shape, through flat views, as a loop: a
+    slice assignment compiles numba's shape check with its error-message formatting."""
+    s, d = src.reshape(src.size), dst.reshape(dst.size)
+    for j in range(s.shape[0]):
+        d[j] = s[j]
+
+
+@njit(cache=True, inline="always")
 def _copy_state5(data, src, dst):
-    dst[0][:] = src[0]
-    dst[1][:] = src[1]
-    dst[2][:] = src[2]
-    dst[3][:] = src[3]
-    dst[4][:] = src[4]
+    _copy(src[0], dst[0])
+    _copy(src[1], dst[1])
+    _copy(src[2], dst[2])
+    _copy(src[3], dst[3])
+    _copy(src[4], dst[4])
 
 
 @njit(cache=True, inline="always")
 def _copy_state6(data, src, dst):
     _copy_state5(data, src, dst)
-    dst[5][:] = src[5]
+    _copy(src[5], dst[5])
 
 
 def engine_kernels(name: str, rate, action, angle, fields: int) -> EngineKernels:
