@@ -86,7 +86,6 @@ def group_scale(data, y, out):
 def group_data(space, *extra) -> tuple:
     """``(ft, ser, thr, point_size, dim, *extra)`` for the group kernels on ``space`` (one
     point's factor table; states hold any number of points one after the other)."""
-
     cg = CompiledGroup.of(space)
     if cg is None:
         raise ValueError(f"{space!r} has no compiled kernels")
