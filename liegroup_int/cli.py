@@ -191,7 +191,9 @@ def _spectrum(scene) -> int:
         print(f"error: {scene.source}: {exc}", file=sys.stderr)
         return 2
     kv = sim.info.get("kelvin_voigt_auto")
-    if kv is not None:
+    if isinstance(kv, str):
+        print(f"kelvin_voigt = auto: {kv}")
+    elif kv is not None:
         print(f"kelvin_voigt = auto: tau = {kv['tau']:.3g} s (undamped max Re lambda = {kv['max_real_undamped']:.3g} "
               f"1/s at |Im| = {kv['at_imag']:.4g} 1/s; damping ratio on mode 1: {kv['zeta1']:.2g})")
     print(f"spectrum at t=0 ({rep.size} unknowns): |lambda|max = {rep.lam_max:.4g} 1/s, "

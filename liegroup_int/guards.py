@@ -79,6 +79,8 @@ def check_step(scene: Scene, stab, tab, dt: float, t0: float, y0) -> dict:
 def check_growth(scene: Scene, stab, t0: float, y0) -> tuple[dict, str | None]:
     """Dense spectrum at ``(t0, y0)``: ``(facts, warning)``; raises SceneError for a mode
     that grows over the run about a state at rest."""
+    if stab.clean:
+        return {"probe": f"skipped ({stab.clean})"}, None
     if stab.sized is not None:  # damping sized on the same spectrum: reuse it
         d = stab.sized
         rep = GrowthReport(d.lam_max, d.max_real_all, d.at_imag_all,

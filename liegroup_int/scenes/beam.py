@@ -453,14 +453,15 @@ def problem(scene: Scene, size_damping: bool = False) -> BeamProblem:
     """The :class:`BeamProblem` of a validated beam scene.
 
     With ``material.kelvin_voigt = "auto"`` and ``size_damping=True`` (what a run does,
-    :func:`build`) the retardation time is sized from the dense linearized spectrum at the
-    initial state (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`) and the
+    :func:`build`) the retardation time of a collocation formulation is sized from the dense
+    linearized spectrum at the initial state (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`) and the
     report kept as ``damping_report``; without it the problem is built undamped, at no
-    cost (scene checks, tests).
+    cost (scene checks, tests). The Galerkin weak form needs no damping ("auto" is 0 and no
+    spectrum is computed: :data:`GALERKIN_CLEAN`).
     """
     pb = _checked[1] if _checked[0] is scene else _undamped(scene)
     kv = scene["material.kelvin_voigt"]
-    if kv == "auto" and size_damping:
+    if kv == "auto" and size_damping and pb.formulation != "galerkin":
         pb = _sized(scene, pb)
     return pb
 
@@ -654,6 +655,8 @@ def build(scene: Scene) -> Simulation:
                            **({} if pb.formulation == "galerkin" else {"C_star": 4.0}),
                            "kelvin_voigt": pb.tau},
         **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
+        **({"kelvin_voigt_auto": f"0 ({GALERKIN_CLEAN})"}
+           if scene["material.kelvin_voigt"] == "auto" and pb.formulation == "galerkin" else {}),
         "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
                     **({"reactions": reaction_columns(pb)} if "reactions" in scene.output.quantities else {}),
                     **({"points": point_columns(scene["output.points"])} if scene["output.points"] else {})},
@@ -693,6 +696,10 @@ def _frames(pb: BeamProblem, fields=()):
 #: (n_ctrl = 125; ~1 s for the eigenvalues on one core).
 PROBE_MAX_UNKNOWNS = 1500
 
+#: Why a Galerkin run computes no dense spectrum at the start (no damping sizing, no probe):
+#: its semi-discretization is Hamiltonian, so the linearized spectrum at rest is imaginary.
+GALERKIN_CLEAN = "galerkin: energy-conserving weak form, imaginary spectrum at rest by construction"
+
 #: What to try when a collocation run grows a mode: the weak form first (it finishes the runs
 #: collocation cannot), then the least damping, then another mesh.
 REMEDY = ('try space.formulation = "galerkin" (energy-conserving weak form: no spurious growing mode, no locking), '
@@ -730,7 +737,8 @@ def stability(scene: Scene, pb: BeamProblem) -> Stability:
                    + ("another" if galerkin else 'space.formulation = "galerkin" (locking-free), or another')
                    + " space.degree or space.n_ctrl")
     return Stability(describe=describe, remedy=REMEDY_GALERKIN if galerkin else REMEDY, remedy_real=remedy_real, spectral_radius=lambda t, y: spectral_radius(pb, t, y),
-                     growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS, sized=pb.damping_report)
+                     growth=growth, at_rest=at_rest, max_unknowns=PROBE_MAX_UNKNOWNS, sized=pb.damping_report,
+                     clean=GALERKIN_CLEAN if galerkin else "")
 
 
 KIND = register_kind(ProblemKind(

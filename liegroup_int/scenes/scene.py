@@ -109,6 +109,9 @@ class Stability:
     sized : object, optional
         A report of damping sized on the dense spectrum at the start (beams:
         ``DampingReport``); the start probe then reuses it instead of recomputing.
+    clean : str, optional
+        Why the dense spectrum at the start need not be computed (a discretization whose
+        spectrum at rest is imaginary by construction); empty: compute it.
     """
 
     describe: str
@@ -119,6 +122,7 @@ class Stability:
     at_rest: Callable[[Any], bool]
     max_unknowns: int
     sized: Any = None
+    clean: str = ""
 
 
 @dataclass

@@ -31,7 +31,8 @@ def test_scene_errors_name_the_key(scene, override, key):
         load_scene(scene, overrides=override)
 
 
-def test_a_run_builds_the_beam_once(monkeypatch):
+@pytest.mark.parametrize("formulation", ["galerkin", "primal"])
+def test_a_run_builds_the_beam_once(monkeypatch, formulation):
     calls = []
     original = beam_kind._undamped
 
@@ -40,6 +41,12 @@ def test_a_run_builds_the_beam_once(monkeypatch):
         return original(scene)
 
     monkeypatch.setattr(beam_kind, "_undamped", counted)
-    scene = load_scene("cantilever")  # validation builds it
-    sim = beam_kind.build(scene)  # the run reuses it (and sizes its damping)
-    assert len(calls) == 1 and sim.problem.damping_report is not None
+    scene = load_scene("cantilever", {"space.formulation": formulation})  # validation builds it
+    sim = beam_kind.build(scene)  # the run reuses it (and sizes the damping of collocation)
+    assert len(calls) == 1
+    if formulation == "galerkin":  # kelvin_voigt = "auto": no spectrum, no damping, said so
+        assert sim.problem.damping_report is None and sim.problem.tau == 0.0
+        assert sim.info["kelvin_voigt_auto"] == f"0 ({beam_kind.GALERKIN_CLEAN})"
+        assert sim.stability.clean == beam_kind.GALERKIN_CLEAN
+    else:
+        assert sim.problem.damping_report is not None and not sim.stability.clean
