@@ -93,6 +93,15 @@ def _patch_points(space: CollocationSpace, rule: str) -> dict:
             "mass_basis": space.basis_s(um)[0], "mass_weights": wm}
 
 
+def _gram(B: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``B^T diag(w) B`` ``(n, n)`` of a basis matrix ``B`` ``(m, n)`` with ``p + 1`` non-zeros
+    per row, through sparse products (``O(m p^2)``, not the dense ``O(m n^2)``)."""
+    import scipy.sparse
+
+    S = scipy.sparse.csr_matrix(B)
+    return np.asarray((S.T @ (scipy.sparse.diags(w) @ S)).todense())
+
+
 def _block_diag(blocks) -> np.ndarray:
     rows, cols = sum(b.shape[0] for b in blocks), sum(b.shape[1] for b in blocks)
     out = np.zeros((rows, cols))
@@ -173,7 +182,7 @@ class GalerkinSpace:
         self.n = space.n_ctrl
         self._mass_rule = tuple((d["mass_basis"], d["mass_weights"]) for d in parts)
         self.mass = _frozen(self.weighted_mass(np.ones(self.m)))
-        self.point_mass = _frozen((self.B0 * self.w_full[:, None]).T @ self.B0)
+        self.point_mass = _frozen(_gram(self.B0, self.w_full))
         _check_definite(self.point_mass, rule)
 
     def weighted_mass(self, density: np.ndarray) -> np.ndarray:
@@ -186,7 +195,7 @@ class GalerkinSpace:
             if np.any(density[a:b + 1] != rho):
                 raise ValueError(f"density: expected one value per patch, patch {k} has several")
             Bm, wm = self._mass_rule[k]
-            blocks.append((Bm * (rho * wm)[:, None]).T @ Bm)
+            blocks.append(_gram(Bm, rho * wm))
         return _block_diag(blocks)
 
     def project(self, values: np.ndarray) -> np.ndarray:
