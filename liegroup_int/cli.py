@@ -72,6 +72,8 @@ def _parser() -> argparse.ArgumentParser:
     mo.add_argument("--n", type=int, default=10, help="number of modes (lowest |lambda| first; default 10)")
     mo.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     mo.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-modes)")
+    mo.add_argument("--no-estimate", action="store_true",
+                    help="skip the error estimate (the same modes on the next finer mesh)")
     co = sub.add_parser("compile", help="compile the kernels of the built-in scenes ahead of the first run")
     co.add_argument("sets", nargs="*", metavar="SET",
                     help="kernel sets to compile (default: those of the built-in scenes as shipped; "
@@ -248,8 +250,70 @@ def _bench(args) -> int:
     return 0
 
 
+#: Relative change of a frequency on the next finer mesh above which ``modes`` calls it
+#: unconverged.
+MODES_UNCONVERGED = 1e-3
+#: Modes with ``|lambda|`` below this fraction of ``|lambda|max`` are rigid-body motion up
+#: to the finite differences' noise: no error estimate.
+NEAR_ZERO = 1e-6
+
+
+def _finer_frequencies(args, scene, n: int):
+    """The lowest frequencies of the scene on the next finer mesh of its kind, near-zero
+    modes left out (:data:`NEAR_ZERO`): ``(freq_hz or None, what was refined or why not)``."""
+    from .integrators import modal_analysis
+    from .scenes import KINDS
+
+    kind = KINDS[scene.kind]
+    if kind.refine is None:
+        return None, f"no finer mesh for a {scene.kind} problem"
+    extra, why = kind.refine(scene)
+    if extra is None:
+        return None, why
+    fine = load_scene(args.scene, {**dict(parse_override(s) for s in args.overrides), **extra})
+    sim = kind.build(fine)
+    try:
+        rep = modal_analysis(sim.problem, 0.0, sim.y0, n + 12)  # room for near-zero modes
+    except ValueError as exc:
+        return None, f"finer mesh: {exc}"
+    return [m.freq_hz for m in rep.modes if abs(m.lam) > NEAR_ZERO * rep.lam_max], \
+        ", ".join(f"{k} = {v}" for k, v in extra.items())
+
+
+def _zero_modes_text(kind, sim, rep) -> str:
+    """The header's account of the zero eigenvalues: constraints apart from rigid-body modes
+    (two zero eigenvalues per held degree of freedom or rigid-body mode)."""
+    held = kind.constrained(sim.problem) if kind.constrained is not None else None
+    free = None if held is None else rep.zero_modes - 2 * held
+    if free is None or free < 0 or free % 2:
+        return f"{rep.zero_modes} zero eigenvalues: constraints and rigid-body modes"
+    return (f"{rep.zero_modes} zero eigenvalues: {2 * held} from the {held} degrees of freedom held by supports "
+            f"and joints, {free} from free rigid-body motion")
+
+
+def _modes_table(rows: list[dict], estimate: str) -> None:
+    print(f"{'mode':>4}  {'f [Hz]':>12}  {'damping ratio':>13}  {'finer mesh':>10}  dominant")
+    for r in rows:
+        flag = ("  (near zero: rigid-body motion)" if r["near_zero"] else "") + (
+            "  (non-oscillatory)" if r["im_lambda"] == 0.0 or abs(r["damping_ratio"]) >= 1.0 else "") + (
+            "  GROWING" if r["growing"] else "") + (
+            "  UNCONVERGED" if r["rel_change_finer"] != "" and r["rel_change_finer"] > MODES_UNCONVERGED else "")
+        change = f"{r['rel_change_finer']:10.2g}" if r["rel_change_finer"] != "" else f"{'-':>10}"
+        print(f"{r['mode']:>4}  {r['freq_hz']:12.6g}  {r['damping_ratio']:13.3g}  {change}  {r['dominant']}{flag}")
+    changes = [r["rel_change_finer"] for r in rows if r["rel_change_finer"] != ""]
+    if not changes:
+        print(f"discretization error: not estimated ({estimate})")
+        return
+    bad = [r["mode"] for r in rows if r["rel_change_finer"] != "" and r["rel_change_finer"] > MODES_UNCONVERGED]
+    print(f"discretization error: relative change on the next finer mesh ({estimate}) at most {max(changes):.2g} "
+          "(about 1e-7 is the finite-difference Jacobian's noise)"
+          + (f"; modes {', '.join(map(str, bad))} change by more than {MODES_UNCONVERGED:g}: unconverged, refine "
+             "the mesh" if bad else ""))
+
+
 def _modes(args) -> int:
-    """``modes``: the linearized increment map at the initial state, its lowest modes."""
+    """``modes``: the linearized increment map at the initial state, its lowest modes, and
+    how much they move on the next finer mesh."""
     import numpy as np
 
     from .integrators import modal_analysis
@@ -263,11 +327,17 @@ def _modes(args) -> int:
         rep = modal_analysis(sim.problem, 0.0, sim.y0, args.n, duration=scene.t_end)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
+    finer, estimate = (None, "--no-estimate") if args.no_estimate else _finer_frequencies(args, scene, args.n)
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-modes"
     from .io.modes import dominant, plot_modes, real_shapes, write_mode_shapes, write_modes_csv
 
     rows = [{"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
-             "im_lambda": m.lam.imag, "growing": m.growing, "dominant": ""} for k, m in enumerate(rep.modes, start=1)]
+             "im_lambda": m.lam.imag, "growing": m.growing, "dominant": "", "rel_change_finer": "",
+             "near_zero": bool(abs(m.lam) <= NEAR_ZERO * rep.lam_max)} for k, m in enumerate(rep.modes, start=1)]
+    # the modes above the noise, paired in order with those of the finer mesh
+    paired = [r for r in rows if not r["near_zero"]]
+    for r, f in zip(paired, finer or []):
+        r["rel_change_finer"] = abs(r["freq_hz"] / f - 1.0)
     shapes = []
     if sim.mode_shape is not None:
         shapes = real_shapes([sim.mode_shape(m.vector) for m in rep.modes], [m.freq_hz for m in rep.modes])
@@ -280,12 +350,8 @@ def _modes(args) -> int:
         labels = [f"mode {r['mode']}: {r['freq_hz']:.4g} Hz ({r['dominant']})" for r in rows]
         made.append(plot_modes(out / "modes.png", shapes, labels, title=f"{scene.name}: mode shapes at t = 0"))
     print(f"{scene.name}: {len(rows)} lowest modes of the linearization at t = 0 ({rep.size} unknowns; "
-          f"{rep.zero_modes} zero eigenvalues: constraints and rigid-body modes; |lambda|max = {rep.lam_max:.4g} 1/s)")
-    print(f"{'mode':>4}  {'f [Hz]':>12}  {'damping ratio':>13}  dominant")
-    for r in rows:
-        flag = ("  (non-oscillatory)" if r["im_lambda"] == 0.0 or abs(r["damping_ratio"]) >= 1.0 else "") + (
-            "  GROWING" if r["growing"] else "")
-        print(f"{r['mode']:>4}  {r['freq_hz']:12.6g}  {r['damping_ratio']:13.3g}  {r['dominant']}{flag}")
+          f"{_zero_modes_text(KINDS[scene.kind], sim, rep)}; |lambda|max = {rep.lam_max:.4g} 1/s)")
+    _modes_table(rows, estimate)
     grow = [r for r in rows if r["growing"]]
     if grow:
         print(f"warning: {scene.source}: {len(grow)} growing mode(s) at t = 0 (Re lambda > 0, growth by more than e "

@@ -26,8 +26,10 @@ def dominant(displacement: np.ndarray, rotation: np.ndarray, length: float) -> s
 
 
 def write_modes_csv(path: Path, rows: list[dict]) -> Path:
-    """``mode, freq_hz, damping_ratio, re_lambda, im_lambda, growing, dominant``."""
-    fields = ["mode", "freq_hz", "damping_ratio", "re_lambda", "im_lambda", "growing", "dominant"]
+    """``mode, freq_hz, damping_ratio, re_lambda, im_lambda, growing, dominant,
+    rel_change_finer`` (the relative change of the frequency on the next finer mesh; empty:
+    not estimated)."""
+    fields = ["mode", "freq_hz", "damping_ratio", "re_lambda", "im_lambda", "growing", "dominant", "rel_change_finer"]
     with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=fields)
         w.writeheader()

@@ -741,6 +741,25 @@ def stability(scene: Scene, pb: BeamProblem) -> Stability:
                      clean=GALERKIN_CLEAN if galerkin else "")
 
 
+def refine(scene: Scene) -> tuple[dict | None, str]:
+    """The scene on the next finer mesh: knot spans halved, ``n_ctrl -> 2 n_ctrl - p``
+    (uniform knots), or ``(None, why not)``."""
+    if any("n_ctrl" in entry for entry in scene["beams"]):
+        return None, "a [[beams]] entry sets its own n_ctrl"
+    p, n = scene["space.degree"], scene["space.n_ctrl"]
+    fine = 2 * n - p
+    if fine > 2001:
+        return None, f"the finer mesh (n_ctrl = {fine}) is beyond the largest n_ctrl, 2001"
+    return {"space.n_ctrl": fine}, ""
+
+
+def constrained(pb: BeamProblem) -> int:
+    """Degrees of freedom held by the supports (3 per held position or rotation) and the
+    rigid joints (6 each)."""
+    ends = sum(3 * (bool(e.fix_position) + bool(e.fix_rotation)) for e in pb.ends)
+    return ends + 6 * len(getattr(pb, "joints", ()))
+
+
 KIND = register_kind(ProblemKind(
     name="beam",
     keys=KEYS,
@@ -749,4 +768,6 @@ KIND = register_kind(ProblemKind(
     build=build,
     check=check,
     compiles=lambda scene: scene["integrator.backend"] == "numba",
+    refine=refine,
+    constrained=constrained,
 ))

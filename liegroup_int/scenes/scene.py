@@ -191,6 +191,12 @@ class ProblemKind:
     #: whether a run of the scene may compile numba kernels (the runner then says so on
     #: stderr as the first compilation starts); None: never
     compiles: Callable[[Scene], bool] | None = None
+    #: ``refine(scene) -> (overrides, "")`` giving the same scene on the next finer mesh
+    #: (``modes`` estimates the discretization error from it), or ``(None, why not)``
+    refine: Callable[[Scene], tuple[dict | None, str]] | None = None
+    #: ``constrained(problem) -> int``: degrees of freedom held by supports and joints
+    #: (``modes`` tells their zero eigenvalues from rigid-body modes); None: unknown
+    constrained: Callable[[Any], int] | None = None
 
 
 def common_keys(kind: ProblemKind) -> dict[str, Key]:
