@@ -204,7 +204,8 @@ def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: flo
         Number of load steps (>= 1).
     tol : float
         A step has converged when the residual norm is at most ``tol`` times the norm of
-        the full external load (module docstring).
+        the full external load (module docstring), or when the Newton correction is at
+        most :data:`XTOL` (the residual at its round-off floor).
     max_iter : int
         Newton iterations allowed per step.
     t : float
@@ -286,10 +287,13 @@ def _newton(system: _System, y, lam: float, scale: float, tol: float, max_iter: 
             lu = scipy.sparse.linalg.splu(J)
         except RuntimeError:
             return y, hist, False, "singular tangent"
-        y, r = _line_search(system, y, lam, lu, -lu.solve(r))
+        dx = -lu.solve(r)
+        y, r = _line_search(system, y, lam, lu, dx)
         hist.append(system.dofs.norm(r) / scale)
         if report:
             report(it, hist[-1])
+        if system.dofs.increment_norm(dx) <= XTOL:  # the residual is at its round-off floor
+            return y, hist, True, ""
     if hist[-1] <= tol:
         return y, hist, True, ""
     return y, hist, False, f"max_iter = {max_iter} reached"
@@ -304,6 +308,13 @@ def _newton(system: _System, y, lam: float, scale: float, tol: float, max_iter: 
 #: roll-up, n_ctrl = 21: 11 iterations per quarter-circle step with 100, 21 with 1, and a
 #: half circle in one step: 24 iterations with 100, divergence without the test).
 MAX_GROWTH = 100.0
+
+#: A step has also converged when the Newton correction ``|(eta / L, Theta)|`` falls to
+#: ``XTOL``: the residual then sits at its round-off floor, about ``1e-16`` times the axial
+#: stiffness over the load (measured 6e-8 relative for the steel cantilever of the
+#: built-in scene under a 1 N tip load, where the corrections fall from 1e-9 to 1e-13 and
+#: then stay at 1e-16).
+XTOL = 1e-12
 
 
 def _line_search(system: _System, y, lam: float, lu, dx, halvings: int = 8):
