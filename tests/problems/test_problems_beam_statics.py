@@ -105,7 +105,7 @@ BEND_BATHE = np.array([100 * np.sin(np.pi / 4) - 23.5, 100 * (1 - np.cos(np.pi /
 
 def test_bend45_matches_published_tip_and_is_fast():
     """The built-in bend45 at n_ctrl = 21 (p = 4), load in 5 steps. Ours is converged to
-    1e-5 in n_ctrl (21 vs 81: 6e-6) at (47.150, 15.685, 53.475); the published positions
+    1e-6 in n_ctrl (21 vs 81: 9e-7) at (47.150, 15.685, 53.475); the published positions
     were computed on 8 linear elements and differ from each other by 0.11 in y, so the
     bound is set by their mesh error, not their digits: within 0.2 per component of Simo &
     Vu-Quoc's (measured 0.11) and 0.25 of Bathe & Bolourchi's three digits (measured 0.21).
