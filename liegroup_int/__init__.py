@@ -23,5 +23,15 @@ __all__ = [
     "ActionProblem", "HomogeneousSpace", "Sphere", "TangentSphere", "Stiefel", "Isospectral", "RnSpace",
     "ProductSpace",
     "Solution", "StateRecorder", "DiagnosticsRecorder", "METHODS", "resolve_method",
-    "IntegrationError", "BlowUpError", "__version__",
+    "IntegrationError", "BlowUpError", "__version__", "solve_static",
 ]
+
+
+def __getattr__(name):
+    """``solve_static`` (:mod:`liegroup_int.problems.beam.statics`), imported on first use
+    so that ``import liegroup_int`` stays light."""
+    if name == "solve_static":
+        from .problems.beam.statics import solve_static
+
+        return solve_static
+    raise AttributeError(f"module 'liegroup_int' has no attribute {name!r}")

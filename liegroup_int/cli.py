@@ -1,4 +1,4 @@
-"""Command line: ``liegroup-int run|scenes|compile ...``.
+"""Command line: ``liegroup-int run|static|scenes|compile ...``.
 
 Errors in scenes or arguments print one line ``error: ...`` and exit with code 2; a run
 that stops early (blow-up) exits with code 3 after saving what it computed.
@@ -28,6 +28,18 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--overwrite", action="store_true", help="replace the run already in the output directory")
     run.add_argument("--resume", type=Path, default=None, metavar="DIR",
                      help="continue the run stored in DIR from its checkpoint (with --set t_end=T to extend it)")
+    stt = sub.add_parser("static", help="static equilibrium of a beam scene (Newton-Raphson with load steps)")
+    stt.add_argument("scene", help="scene file or built-in scene name (space.formulation = \"galerkin\")")
+    stt.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scene key (repeatable)")
+    stt.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-static)")
+    stt.add_argument("--steps", type=int, default=10, help="load steps (load factors 1/N, 2/N, ..., 1; default 10)")
+    stt.add_argument("--tol", type=float, default=1e-8,
+                     help="residual norm relative to the load norm at which a step has converged (default 1e-8)")
+    stt.add_argument("--max-iter", type=int, default=30, help="Newton iterations per load step (default 30)")
+    stt.add_argument("--time", type=float, default=None, metavar="T",
+                     help="time at which the load profiles are evaluated (default: the scene's t_end)")
+    stt.add_argument("--quiet", action="store_true", help="no per-step residuals")
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -403,6 +415,10 @@ def main(argv: list[str] | None = None) -> int:
             return _study(args)
         if args.command == "compile":
             return _compile(args)
+        if args.command == "static":
+            from .static_run import main_static
+
+            return main_static(args)
         if args.command == "modes":
             return _modes(args)
         if args.command == "bench":

@@ -16,9 +16,10 @@ from .model import (
 from .formulations import beam_problem
 from .galerkin import GalerkinBeamProblem, GalerkinBeamState
 from .problem import BeamProblem, BeamState, quadrature_weights
+from .statics import StaticDivergence, StaticResult, solve_static
 
 __all__ = [
     "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "beam_problem", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
     "BoundaryConditions", "SupportMotion", "InitialConditions", "curvature_update", "jr_times",
-    "jr_theta_s_derivative", "strains", "quadrature_weights",
+    "jr_theta_s_derivative", "strains", "quadrature_weights", "solve_static", "StaticResult", "StaticDivergence",
 ]

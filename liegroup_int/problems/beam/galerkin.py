@@ -342,15 +342,16 @@ class GalerkinBeamProblem(BeamBase):
         kd = self.B1 @ y.w + cross(y.K, Om)
         return gd, kd
 
-    def _forces(self, t: float, y: GalerkinBeamState, Om: np.ndarray):
+    def _forces(self, t: float, y: GalerkinBeamState, Om: np.ndarray, load_factor: float = 1.0):
         """Generalized forces on the control values: ``F`` (spatial) and ``T`` (material),
-        ``(n, 3)`` each (internal, inertial and external; no Dirichlet rows)."""
+        ``(n, 3)`` each (internal, inertial and external; no Dirichlet rows). The external
+        loads are scaled by ``load_factor`` (the load steps of the static solver)."""
         R, K = y.R, y.K
         Gt, N, M = self._resultants(y, Om)
         wa, wf = self.wa[:, None], self.wf[:, None]
         F = -(self.B1.T @ (wa * rot(R, N)))
         pt = wa * cross(Gt, N) - wf * (cross(M, K) + cross(Om, self.Jm * Om))
-        f = self.loads.distributed_profile(t) if (self.has_q or self.has_m) else 0.0
+        f = load_factor * self.loads.distributed_profile(t) if (self.has_q or self.has_m) else 0.0
         if self.has_m:
             pt = pt + f * wf * rot_T(R, np.broadcast_to(self.m_dist, Om.shape))
         T = self.B0.T @ pt - self.B1.T @ (wf * M)
@@ -359,9 +360,9 @@ class GalerkinBeamProblem(BeamBase):
         for row, point, ld in self.point_loads:
             Re = R[point]
             if np.any(ld.force):
-                F[row] += self._end_force(ld, t, Re)
+                F[row] += load_factor * self._end_force(ld, t, Re)
             if np.any(ld.couple):
-                T[row] += Re.T @ self._end_couple(ld, t, Re)
+                T[row] += load_factor * (Re.T @ self._end_couple(ld, t, Re))
         return F, T
 
     def rotation_angle(self, u: np.ndarray) -> float:

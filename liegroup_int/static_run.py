@@ -1,0 +1,146 @@
+"""``liegroup-int static SCENE``: static equilibrium of a beam scene, written to a directory.
+
+Files in the output directory:
+
+* ``summary.json``: scene, discretization, load time, load factors, Newton iterations and
+  relative residual norms per step, ``converged``, the tip position and, when a step did
+  not converge, the one-line ``error`` (the rest describes the last converged step);
+* ``shape.csv``: the centreline of the last converged state at 101 parameters
+  (``u, x, y, z``);
+* ``static.vtu``: that state at the frame points with its section frames (ParaView);
+* ``state.npz``: its state arrays (``c, v, w, R, K``).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .io import write_json
+from .io.paraview import write_beam_vtu
+from .problems.beam.statics import StaticDivergence, solve_static
+from .scenes import Scene, SceneError
+
+
+class StaticFailed(RuntimeError):
+    """A load step did not converge; the files describe the last converged one."""
+
+
+def _problem(scene: Scene):
+    """The scene's beam problem (the ``static`` command loads the scene with the NumPy
+    backend: the solver evaluates the forces in NumPy and a compiled action would only add
+    a compilation)."""
+    from .scenes.beam import problem
+
+    if scene.kind != "beam":
+        raise SceneError(f"{scene.source}: static needs a beam scene (problem = \"beam\"), not {scene.kind!r}")
+    if scene["space.formulation"] != "galerkin":
+        raise SceneError(f'{scene.source}: static needs space.formulation = "galerkin" '
+                         f'(got "{scene["space.formulation"]}")')
+    return problem(scene)
+
+
+class _Printer:
+    """Progress: one line per load step with the relative residual of each iterate."""
+
+    def __init__(self, steps: int, enabled: bool):
+        self.steps, self.enabled, self.open = steps, enabled, False
+
+    def __call__(self, step, lam, it, r):
+        if not self.enabled:
+            return
+        if it == 0:
+            self.close()
+            print(f"step {step}/{self.steps}  lambda = {lam:.4g}  residuals:", end="", flush=True)
+            self.open = True
+        print(f" {r:.2e}", end="", flush=True)
+
+    def close(self):
+        if self.open:
+            print(flush=True)
+            self.open = False
+
+
+def run_static(scene: Scene, out_dir: Path, steps: int = 10, tol: float = 1e-8, max_iter: int = 30,
+               t: float | None = None, quiet: bool = False) -> dict:
+    """Solve the static equilibrium of ``scene`` at load time ``t`` (default ``t_end``) and
+    write the files of the module docstring to ``out_dir``; returns the summary.
+
+    Raises :class:`SceneError` on bad input (one line) and :class:`StaticFailed` when a
+    load step does not converge (after writing the last converged state)."""
+    pb = _problem(scene)
+    t = scene.t_end if t is None else float(t)
+    printer = _Printer(steps, not quiet)
+    clock = time.process_time()
+    error = None
+    try:
+        res = solve_static(pb, load_steps=steps, tol=tol, max_iter=max_iter, t=t, progress=printer)
+    except ValueError as exc:
+        printer.close()
+        raise SceneError(f"{scene.source}: {exc}") from None
+    except StaticDivergence as exc:
+        res, error = exc.result, str(exc)
+    printer.close()
+    summary = _summary(scene, pb, res, t, steps, tol, max_iter, time.process_time() - clock, error)
+    _write(out_dir, pb, res.state, summary)
+    if error is not None:
+        raise StaticFailed(f"{scene.source}: {error}; the last converged state is in {out_dir}")
+    return summary
+
+
+def _summary(scene: Scene, pb, res, t, steps, tol, max_iter, cpu_s, error) -> dict:
+    return {
+        "scene": scene.name, "source": scene.source, "version": __version__, "command": "static",
+        "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
+                           "n_ctrl": scene["space.n_ctrl"], "length": pb.space.length},
+        "load_time": t, "load_steps": steps, "tol": tol, "max_iter": max_iter,
+        "converged": res.converged, "load_factors": res.load_factors, "iterations": res.iterations,
+        "residuals": res.residuals, "load_norm": res.load_norm, "tangents": res.tangents,
+        "residual_evaluations": res.evaluations, "cpu_time_s": cpu_s,
+        "tip": pb.tip(res.state).tolist(), **({"error": error} if error is not None else {}),
+    }
+
+
+def _write(out_dir: Path, pb, y, summary: dict) -> None:
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    u = np.linspace(0.0, 1.0, 101)
+    line = pb.centreline(y, u)
+    np.savetxt(out_dir / "shape.csv", np.column_stack([u, line]), delimiter=",", header="u,x,y,z", comments="")
+    _, N0, s = pb.frame_points
+    write_beam_vtu(out_dir / "static.vtu", np.asarray(N0) @ y.c, y.R, {"s": np.asarray(s, float)})
+    np.savez(out_dir / "state.npz", **y.arrays())
+    write_json(out_dir / "summary.json", summary)
+
+
+def main_static(args) -> int:
+    """The ``static`` command (:mod:`liegroup_int.cli`): exit 0, 2 (bad input) or 3 (a load
+    step did not converge)."""
+    from .scenes import load_scene, parse_override
+
+    if args.steps < 1:
+        raise SceneError(f"static: --steps {args.steps}: expected a positive number of load steps")
+    if args.max_iter < 1:
+        raise SceneError(f"static: --max-iter {args.max_iter}: expected a positive number of iterations")
+    if not args.tol > 0:
+        raise SceneError(f"static: --tol {args.tol}: expected a positive tolerance")
+    overrides = {**dict(parse_override(s) for s in args.overrides), "integrator.backend": "numpy"}
+    scene = load_scene(args.scene, overrides)
+    out = args.out if args.out is not None else Path("runs") / f"{scene.name}-static"
+    try:
+        s = run_static(scene, out, steps=args.steps, tol=args.tol, max_iter=args.max_iter, t=args.time,
+                       quiet=args.quiet)
+    except StaticFailed as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    except OSError as exc:
+        print(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    tip = ", ".join(f"{x:.6g}" for x in s["tip"])
+    print(f"{scene.name}: equilibrium in {len(s['load_factors'])} load steps, {sum(s['iterations'])} Newton "
+          f"iterations, {s['cpu_time_s']:.3g} s CPU; tip ({tip}) -> {out}")
+    return 0
