@@ -6,7 +6,6 @@ tip positions, and the command's exits."""
 from __future__ import annotations
 
 import json
-import time
 
 import numpy as np
 import pytest
@@ -103,24 +102,21 @@ BEND_SIMO_VU_QUOC = np.array([47.23, 15.79, 53.37])
 BEND_BATHE = np.array([100 * np.sin(np.pi / 4) - 23.5, 100 * (1 - np.cos(np.pi / 4)) - 13.4, 53.4])
 
 
-def test_bend45_matches_published_tip_and_is_fast():
+def test_bend45_matches_published_tip():
     """The built-in bend45 at n_ctrl = 21 (p = 4), load in 5 steps. Ours is converged to
     1e-6 in n_ctrl (21 vs 81: 9e-7) at (47.150, 15.685, 53.475); the published positions
     were computed on 8 linear elements and differ from each other by 0.11 in y, so the
     bound is set by their mesh error, not their digits: within 0.2 per component of Simo &
     Vu-Quoc's (measured 0.11) and 0.25 of Bathe & Bolourchi's three digits (measured 0.21).
     With the square section's torsion constant and no shear factor instead (GJ = 7.0e5,
-    GA = 5e6) the tip moves by 0.26, so the bounds see the section data. CPU time of the
-    solve under 1 s (measured 0.50-0.55 s)."""
+    GA = 5e6) the tip moves by 0.26, so the bounds see the section data. (Its CPU time is
+    measured by benchmarks/static_bend45.py.)"""
     pb = problem(load_scene("bend45", {"integrator.backend": "numpy"}))
-    clock = time.process_time()
     res = solve_static(pb, load_steps=5)
-    cpu = time.process_time() - clock
     tip = pb.tip(res.state)
     assert res.converged
     assert np.max(np.abs(tip - BEND_SIMO_VU_QUOC)) < 0.2, tip
     assert np.max(np.abs(tip - BEND_BATHE)) < 0.25, tip
-    assert cpu < 1.0, cpu
 
 
 def test_divergence_keeps_the_last_converged_state():
