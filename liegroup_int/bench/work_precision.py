@@ -2,8 +2,12 @@
 
 For a :class:`~liegroup_int.bench.plans.Plan`:
 
-1. The reference: RKMK6 on ``plan.reference`` (primal collocation) at
-   ``|lambda|max dt = plan.reference_y``.
+1. The reference: RKMK6 on ``plan.reference`` (``plan.reference_formulation``) at
+   ``|lambda|max dt = plan.reference_y``; the same on the next coarser mesh (knot spans
+   doubled): its distance to the reference bounds the reference's space error (the error
+   falls with the mesh), RKMK65 at twice the step bounds its time error. The table states
+   both and how much more accurate than the best run the reference is (at least
+   :data:`REFERENCE_MARGIN` times, or it says which errors it does not resolve).
 2. Our runs: every formulation x discretization x fixed-step method at that method's
    stable step (:func:`~liegroup_int.integrators.stable_step` on the spectral radius at
    the initial state); on the primal time-study discretization every method over fractions
@@ -362,6 +366,11 @@ def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
 
 
 # ----------------------------------------------------------------------------- the study
+#: How much more accurate than the best run it ranks the reference must be (its space and
+#: time error bounds against that run's error).
+REFERENCE_MARGIN = 10.0
+
+
 @dataclass
 class Result:
     plan: Plan
@@ -375,6 +384,14 @@ class Result:
     peer_version: str | None = None
     peer_note: str | None = None
     damping: dict[str, dict] = field(default_factory=dict)
+    reference_coarse: Run | None = None
+
+    def reference_bound(self) -> float:
+        """Bound on the reference's own error: its distance to the coarser reference
+        (space) plus RKMK65 at twice its step (time); NaN when neither was measured."""
+        parts = [r.error for r in (self.reference_coarse, self.reference_check)
+                 if r is not None and r.status == "ok" and np.isfinite(r.error)]
+        return float(sum(parts)) if parts else math.nan
 
 
 def _say(log: Callable | None, msg: str) -> None:
@@ -419,6 +436,25 @@ def _peer_runs(plan: Plan, cached: Callable, ref: Run, log: Callable | None) -> 
     return peers, P.VERSION, None
 
 
+def _coarse_reference(plan: Plan, disc: Callable, cached: Callable, ref: Run, log: Callable | None) -> Run | None:
+    """RKMK6 on the reference's next coarser mesh (knot spans doubled, ``n -> (n + p) / 2``)
+    at the same ``|lambda| dt``; its distance to the reference bounds the reference's space
+    error. None when that mesh would have too few control points."""
+    p, n = plan.reference
+    n_c = (n + p) // 2
+    if n_c < p + 2:
+        return None
+    d = disc(p, n_c, plan.reference_formulation)
+    y = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d.lam_max, plan.t_end).y)
+    dt = fit_step(y / d.lam_max, plan.every)
+    run = cached(("ref-coarse", plan.reference_formulation, p, n_c, dt),
+                 partial(run_fixed, d, "rkmk6", dt, plan.t_end, plan.every, f"p{p} n{n_c}"))
+    run.formulation = plan.reference_formulation
+    run.error = tip_error(run, ref) if run.status == "ok" else math.nan
+    _say(log, "  space-error bound of the reference (the next coarser mesh): " + _describe(run))
+    return run
+
+
 def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", peer: bool = True,
                    fresh: bool = False, log: Callable | None = print) -> Result:
     """Run a plan (module doc). ``out/runs`` caches finished runs unless ``out`` is None."""
@@ -449,25 +485,30 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
             _store(cache, key, run)
         return run
 
-    # 1. reference (and a check of its time error at twice the step); primal collocation
+    # 1. reference (and checks of its space and time errors)
     p_ref, n_ref = plan.reference
+    f_ref = plan.reference_formulation
     res_ref = f"p{p_ref} n{n_ref}"
-    _say(log, f"reference: RKMK6, primal {res_ref}")
-    d_ref = disc(p_ref, n_ref)
+    _say(log, f"reference: RKMK6, {f_ref} {res_ref}")
+    d_ref = disc(p_ref, n_ref, f_ref)
     y_ref = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_ref.lam_max, plan.t_end).y)
     dt_ref = fit_step(y_ref / d_ref.lam_max, plan.every)
-    ref = cached(("ref", p_ref, n_ref, dt_ref), partial(run_fixed, d_ref, "rkmk6", dt_ref, plan.t_end, plan.every, res_ref))
-    ref.formulation = "primal"
+    # primal keys are those of the references cached before the formulation was a setting
+    ref_key = ("ref", p_ref, n_ref, dt_ref) if f_ref == "primal" else ("ref", f_ref, p_ref, n_ref, dt_ref)
+    ref = cached(ref_key, partial(run_fixed, d_ref, "rkmk6", dt_ref, plan.t_end, plan.every, res_ref))
+    ref.formulation = f_ref
     if ref.status != "ok":
         raise RuntimeError(f"bench {plan.scene}: the reference run failed: {ref.status}")
     _say(log, _describe(ref))
+    coarse = _coarse_reference(plan, disc, cached, ref, log)
     # a second 6th-order method (RKMK65, stable on the imaginary axis) at twice the step:
     # its distance to the reference bounds the reference's time error (RKMK6 itself is
     # weakly unstable, so doubling its step would measure its growth, not its accuracy)
     dt_chk = fit_step(2 * dt_ref, plan.every)
-    check = cached(("ref-check", "rkmk65", p_ref, n_ref, dt_chk),
-                   partial(run_fixed, d_ref, "rkmk65", dt_chk, plan.t_end, plan.every, res_ref))
-    check.formulation = "primal"
+    chk_key = ("ref-check", "rkmk65", p_ref, n_ref, dt_chk) if f_ref == "primal" else \
+        ("ref-check", "rkmk65", f_ref, p_ref, n_ref, dt_chk)
+    check = cached(chk_key, partial(run_fixed, d_ref, "rkmk65", dt_chk, plan.t_end, plan.every, res_ref))
+    check.formulation = f_ref
     check.error = tip_error(check, ref)
     _say(log, "  time-error bound of the reference (RKMK65 at 2 dt): " + _describe(check))
 
@@ -536,7 +577,7 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     damping = {f"p{p} n{n} {form}": (d.damping.as_dict() if d.damping else {"refused": d.refused})
                for (p, n, form), d in built.items() if form == "mixed"}
     mine = list(ours.values())
-    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note, damping)
+    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note, damping, coarse)
 
 
 # ----------------------------------------------------------------------------- reporting
@@ -544,17 +585,36 @@ def _fmt(x, spec: str) -> str:
     return "-" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
 
 
+def _reference_lines(result: Result) -> list[str]:
+    """The reference, the bounds on its own error, and its margin over the best run."""
+    ref, chk, coarse = result.reference, result.reference_check, result.reference_coarse
+    lines = [f"Reference: RKMK6, {ref.formulation} {ref.resolution}, dt = {ref.dt:.3g} s ({ref.steps} steps, "
+             f"{ref.cpu_s:.1f} s CPU); max |tip_ref| = {np.max(np.linalg.norm(ref.tip, axis=1)):.4g} m."]
+    if coarse is not None:
+        lines.append(f"Bound on its space error (the same on the next coarser mesh, {coarse.resolution}, against it): "
+                     + (f"{_fmt(coarse.error, '.2e')} m." if coarse.status == "ok" else f"not measured ({coarse.status})."))
+    if chk is not None:
+        lines.append(f"Bound on its time error (RKMK65 at dt = {chk.dt:.3g} s against it): "
+                     + (f"{_fmt(chk.error, '.2e')} m." if chk.status == "ok" else f"not measured ({chk.status})."))
+    bound = result.reference_bound()
+    errs = [r.error for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
+    if not errs or not np.isfinite(bound):
+        return lines
+    best = min(errs)
+    if best >= REFERENCE_MARGIN * bound:
+        lines.append(f"The reference is {best / bound:.3g}x more accurate than the best run ({best:.2e} m).")
+    else:
+        lines.append(f"WARNING: the reference is only {best / bound:.2g}x more accurate than the best run ({best:.2e} m): "
+                     f"errors below {REFERENCE_MARGIN * bound:.2e} m ({REFERENCE_MARGIN:g}x its error bound) are not "
+                     "resolved; use a finer plan.reference.")
+    return lines
+
+
 def markdown(result: Result) -> str:
     """Tables of all runs and of the ratios, as Markdown."""
     pl = result.plan
     lines = [f"### {pl.scene}: T = {pl.t_end:g} s, tip history every {pl.every:g} s", ""]
-    ref = result.reference
-    lines.append(f"Reference: RKMK6, primal {ref.resolution}, dt = {ref.dt:.3g} s ({ref.steps} steps, "
-                 f"{ref.cpu_s:.1f} s CPU); max |tip_ref| = {np.max(np.linalg.norm(ref.tip, axis=1)):.4g} m.")
-    chk = result.reference_check
-    if chk is not None:
-        lines.append(f"Bound on its time error (RKMK65 at dt = {chk.dt:.3g} s against it): "
-                     + (f"{_fmt(chk.error, '.2e')} m." if chk.status == "ok" else f"not measured ({chk.status})."))
+    lines += _reference_lines(result)
     tr = result.time_reference
     lines.append(f"Time study on primal {tr.resolution}: time errors against RKMK6 on that discretization at dt = {tr.dt:.3g} s "
                  f"(which is {_fmt(tr.error, '.2e')} m from the reference: the space error of {tr.resolution}).")
@@ -653,7 +713,7 @@ def plot(result: Result, path: Path) -> Path:
     ax.set_xlabel("CPU time [s]")
     ax.set_ylabel("max tip error against the fine RKMK6 reference [m]")
     ax.set_title(f"{result.plan.scene}, T = {result.plan.t_end:g} s: space + time error "
-                 f"(reference: RKMK6, primal {result.reference.resolution})", fontsize=9)
+                 f"(reference: RKMK6, {result.reference.formulation} {result.reference.resolution})", fontsize=9)
     ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     tr = result.time_reference
     for fam in families:
@@ -684,6 +744,8 @@ def write(result: Result, out: Path) -> list[Path]:
     js = out / "work_precision.json"
     payload = {"plan": asdict(result.plan), "reference": result.reference.row(),
                "reference_check": None if result.reference_check is None else result.reference_check.row(),
+               "reference_coarse": None if result.reference_coarse is None else result.reference_coarse.row(),
+               "reference_error_bound": result.reference_bound(),
                "time_reference": result.time_reference.row(),
                "lambda_max": result.lam_max, "damping": result.damping, "ours": [r.row() for r in result.ours],
                "peers": [r.row() for r in result.peers], "ratios": result.ratios,

@@ -9,21 +9,25 @@ import pytest
 
 from liegroup_int.bench import (
     Plan,
+    Result,
     Run,
+    markdown,
     plan_for,
     ratios,
     tip_error,
     work_precision,
     write,
 )
+from liegroup_int.bench.work_precision import _reference_lines
 from liegroup_int.cli import main
 
 # Pendulum over 20 ms: the smallest plan that still has a space ladder (n_ctrl 11, 21) in
 # both formulations (mixed p4 n21 needs damping: a pair grows at 3.7 1/s undamped), a time
 # study on primal p=4, n_ctrl=15 (RKMK4 at 1, 1/2, 1/4 of its stable step) and an adaptive
-# pair; RKMK6 reference on primal p=6, n_ctrl=21. No CPU budget: a budget would turn runs
+# pair; RKMK6 reference on primal p=6, n_ctrl=21 (its space error bounded by p=6, n_ctrl=13).
+# No CPU budget: a budget would turn runs
 # into "skipped" on a loaded machine and make the assertions below depend on the load.
-TINY = Plan(scene="pendulum", t_end=0.02, every=2e-3, reference=(6, 21), reference_y=0.4,
+TINY = Plan(scene="pendulum", t_end=0.02, every=2e-3, reference=(6, 21), reference_y=0.4, reference_formulation="primal",
             discretizations=((4, 11), (4, 21)), time_study=(4, 15), methods=("rkmk4",),
             dt_fractions=(1.0, 0.5, 0.25), adaptive=("rkmk45",), rtols=(1e-8,), peer_elements=(),
             peer_linear=False, budget_s=float("inf"))
@@ -59,6 +63,37 @@ def test_tiny_plan_measures_space_and_time_error(tiny):
     ad = [r for r in res.ours if "adaptive" in r.family]
     assert len(ad) == 1 and ad[0].steps > 0 and ad[0].rtol == 1e-8 and np.isfinite(ad[0].time_error)
     assert ad[0].formulation == "primal"
+
+
+def test_the_reference_states_its_error_bounds(tiny):
+    """The coarser reference (knot spans doubled: p6 n13) and RKMK65 at twice the step bound
+    the reference's own error; 20 ms after the load is switched on the space error still
+    converges slowly, so this reference does not resolve the best runs, and the table says so."""
+    out, res = tiny
+    coarse, chk = res.reference_coarse, res.reference_check
+    assert coarse.resolution == "p6 n13" and coarse.formulation == "primal" and coarse.status == "ok"
+    assert res.reference_bound() == pytest.approx(coarse.error + chk.error) and coarse.error > 0
+    md = markdown(res)
+    assert f"Bound on its space error (the same on the next coarser mesh, p6 n13, against it): {coarse.error:.2e} m." in md
+    best = min(r.error for r in res.ours)
+    assert ("WARNING: the reference is only" in md) == (best < 10 * res.reference_bound())
+
+
+@pytest.mark.parametrize("best, warned", [(1e-3, False), (1e-5, True)])
+def test_reference_margin_rule(best, warned):
+    """A reference whose error bound (space 1e-5 + time 1e-7) is less than 10x below the best
+    run's error is flagged, with the error level it cannot resolve."""
+    ref = Run("RKMK6", "p6 n41", 1e-5, "galerkin", steps=10, cpu_s=1.0, t=np.zeros(1), tip=np.ones((1, 3)))
+    coarse = Run("RKMK6", "p6 n23", 2e-5, "galerkin", error=1e-5)
+    chk = Run("RKMK65", "p6 n41", 2e-5, "galerkin", error=1e-7)
+    ours = [Run("RKMK4", "p4 n21", 1e-4, "galerkin", cpu_s=0.1, error=best)]
+    res = Result(TINY, ref, chk, ref, ours, [], [], {}, reference_coarse=coarse)
+    text = "\n".join(_reference_lines(res))
+    assert ("WARNING" in text) == warned
+    if warned:
+        assert "errors below 1.01e-04 m (10x its error bound) are not resolved" in text
+    else:
+        assert "The reference is 99x more accurate than the best run" in text
 
 
 def test_tiny_plan_runs_the_mixed_formulation(tiny):
