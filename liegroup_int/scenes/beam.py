@@ -137,6 +137,11 @@ KEYS = {
         Key("initial.velocity", "vec3", ZERO, "uniform initial velocity", "m/s"),
         Key("initial.omega", "vec3", ZERO, "initial rigid angular velocity (spatial)", "rad/s"),
         Key("initial.axis_point", "vec3", ZERO, "point on the axis of the initial rigid rotation", "m"),
+        Key("initial.state", "str", "reference", 'initial configuration: the unstressed reference geometry, or '
+            '"static": the static equilibrium under the loads at t = 0, at rest (galerkin; Newton with load steps, '
+            'as `liegroup-int static`)', choices=("reference", "static")),
+        Key("initial.static_steps", "int", 10, 'load steps of the static solve of initial.state = "static"', "",
+            _int_between(1, 10000)),
         Key("beams", "tables", (), "a frame: [[beams]] entries in chain order, each a patch with the keys of "
             "[geometry] (kind, length, direction, origin, ...), optionally its own n_ctrl and its own section "
             "([beams.section], [beams.material]: the scene's keys fill in the rest); each beam's end is joined "
@@ -635,9 +640,29 @@ def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
     return {"dt_auto": step.dt, "lambda_max": lam, "lambda_dt": step.y, "dt_rule": step.rule}
 
 
+def _static_start(scene: Scene, pb: BeamProblem) -> tuple:
+    """``initial.state = "static"``: the equilibrium under the loads at t = 0, at rest, and
+    what the solve took (for summary.json); one-line SceneErrors."""
+    from ..problems.beam.statics import StaticDivergence, solve_static
+
+    where = f"{scene.source}: key 'initial.state' = 'static'"
+    if any(np.any(scene[f"initial.{k}"]) for k in ("velocity", "omega")):
+        raise SceneError(f"{where}: starts at rest; remove initial.velocity and initial.omega")
+    steps = scene["initial.static_steps"]
+    try:
+        res = solve_static(pb, load_steps=steps, t=0.0)
+    except ValueError as exc:
+        raise SceneError(f"{where}: {exc}") from None
+    except StaticDivergence as exc:
+        raise SceneError(f"{where}: {exc}; try more initial.static_steps (`liegroup-int static` shows the "
+                         "residuals)") from None
+    return res.state, {"initial_static": {"load_steps": steps, "iterations": sum(res.iterations),
+                                          "residual": res.residuals[-1][-1]}}
+
+
 def build(scene: Scene) -> Simulation:
     pb = problem(scene, size_damping=True)
-    y0 = pb.initial_state()
+    y0, static = (pb.initial_state(), {}) if scene["initial.state"] == "reference" else _static_start(scene, pb)
 
     def final_state(y):
         return {"tip": pb.tip(y).tolist(), "energy": pb.energy(y, scene.t_end), "orth_error": pb.orth_error(y)}
@@ -649,6 +674,7 @@ def build(scene: Scene) -> Simulation:
         info.update(auto_step(scene, pb, y0))
     info = {
         **info,
+        **static,
         "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
                            "n_ctrl": scene["space.n_ctrl"],
                            "length": pb.space.length,
