@@ -11,6 +11,7 @@ from ..problems.beam import (
     BeamProblem,
     BeamState,
     BoundaryConditions,
+    EndBody,
     EndLoad,
     InitialConditions,
     Loads,
@@ -150,6 +151,9 @@ KEYS = {
         Key("point_loads", "tables", (), "[[point_loads]] entries: s (fraction of the reference length, inside "
             "(0, 1)), force and couple (spatial, dead), and a time profile (profile, t_on, t_off, ramp, table); a "
             "beam is split at s into two patches joined rigidly, where the load acts"),
+        Key("bodies", "tables", (), "[[bodies]] entries: rigid bodies fixed to an end of the beam (galerkin): at "
+            "(\"start\" or \"end\"), mass [kg], inertia (principal moments about the end point along the end "
+            "section's d1, d2, d3 [kg m^2]); the centre of mass at the end point (a tip mass, a hub)"),
         Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
             "(columns s0p5_x, s0p5_y, s0p5_z for 0.5), e.g. [0.5, 1.0]", "", _fractions),
         Key("output.fields", "strs", (), "section quantities at the collocation points, in results.h5 snapshots "
@@ -233,6 +237,14 @@ BEAM_KEYS = {
     "name": Key("name", "str", "", "name of the beam (errors and docs)"),
     "n_ctrl": Key("n_ctrl", "int", 0, "control points of this patch (0: space.n_ctrl)", "", lambda v: None if v >= 0 else
                   "an integer >= 0"),
+}
+#: Keys of one ``[[bodies]]`` entry.
+BODY_KEYS = {
+    "at": Key("at", "str", "end", "the end the body is fixed to", choices=("start", "end")),
+    "mass": Key("mass", "float", 0.0, "mass", "kg", non_negative),
+    "inertia": Key("inertia", "vec3", ZERO, "principal moments of inertia about the end point, along the end "
+                   "section's d1, d2, d3", "kg m^2"),
+    "offset": Key("offset", "vec3", ZERO, "centre of mass from the end point (only [0, 0, 0] is supported)", "m"),
 }
 #: Keys of one ``[[point_loads]]`` entry.
 POINT_LOAD_KEYS = {
@@ -493,10 +505,13 @@ def _undamped(scene: Scene) -> BeamProblem:
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key
+    bodies = _bodies(scene)
+    if bodies and scene["space.formulation"] != "galerkin":
+        raise SceneError(f"{scene.source}: key 'bodies': end bodies need space.formulation = \"galerkin\"")
     try:
         pb = beam_problem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
                           kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"],
-                          quadrature=scene["space.quadrature"])
+                          quadrature=scene["space.quadrature"], bodies=bodies)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
     return pb
@@ -638,6 +653,22 @@ def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
     if step.warning:
         print(f"warning: {scene.source}: {step.warning}", file=sys.stderr)
     return {"dt_auto": step.dt, "lambda_max": lam, "lambda_dt": step.y, "dt_rule": step.rule}
+
+
+def _bodies(scene: Scene) -> tuple:
+    """The scene's ``[[bodies]]`` as :class:`EndBody` objects (one-line errors)."""
+    out = []
+    for i, entry in enumerate(scene["bodies"]):
+        where = f"{scene.source}: bodies[{i}]"
+        v = resolve_keys(BODY_KEYS, entry, where)
+        if np.any(v["offset"]):
+            raise SceneError(f"{where}: key 'offset' = {list(v['offset'])}: a body off the end point is not "
+                             "supported; give its inertia about the end point (parallel-axis theorem)")
+        try:
+            out.append(EndBody(at=v["at"], mass=v["mass"], inertia=tuple(v["inertia"])))
+        except ParameterError as exc:
+            raise SceneError(f"{where}: key '{exc.field}': {exc.reason}") from None
+    return tuple(out)
 
 
 def _static_start(scene: Scene, pb: BeamProblem) -> tuple:

@@ -4,6 +4,7 @@ isogeometric Galerkin (weak) form."""
 from .kinematics import curvature_update, jr_theta_s_derivative, jr_times, strains
 from .model import (
     BoundaryConditions,
+    EndBody,
     EndLoad,
     InitialConditions,
     Loads,
@@ -19,7 +20,7 @@ from .problem import BeamProblem, BeamState, quadrature_weights
 from .statics import StaticDivergence, StaticResult, solve_static
 
 __all__ = [
-    "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "beam_problem", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "Loads",
+    "BeamProblem", "BeamState", "GalerkinBeamProblem", "GalerkinBeamState", "beam_problem", "Material", "Section", "SectionConstants", "Profile", "EndLoad", "EndBody", "Loads",
     "BoundaryConditions", "SupportMotion", "InitialConditions", "curvature_update", "jr_times",
     "jr_theta_s_derivative", "strains", "quadrature_weights", "solve_static", "StaticResult", "StaticDivergence",
 ]

@@ -9,14 +9,17 @@ from .problem import ALL_FORMULATIONS, BeamProblem
 
 def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, formulation: str = "primal", quadrature: str = "gauss-p"):
+                 kelvin_voigt: float = 0.0, formulation: str = "primal", quadrature: str = "gauss-p",
+                 bodies: tuple = ()):
     """A :class:`~.problem.BeamProblem` (``"primal"``, ``"mixed"``) or a
-    :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, with its ``quadrature`` rule)
-    with these arguments."""
+    :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, with its ``quadrature`` rule
+    and end ``bodies``) with these arguments."""
     if formulation not in ALL_FORMULATIONS:
         raise ValueError(f"formulation: expected one of {', '.join(ALL_FORMULATIONS)}, got {formulation!r}")
     if formulation == "galerkin":
         return GalerkinBeamProblem(space, constants, bcs, loads, initial, backend=backend, kelvin_voigt=kelvin_voigt,
-                                   quadrature=quadrature)
+                                   quadrature=quadrature, bodies=bodies)
+    if bodies:
+        raise ValueError(f'bodies need space.formulation = "galerkin" (got {formulation!r})')
     return BeamProblem(space, constants, bcs, loads, initial, backend=backend, kelvin_voigt=kelvin_voigt,
                        formulation=formulation)

@@ -101,6 +101,11 @@ class GalerkinBeamProblem(BeamBase):
     quadrature : str
         Quadrature rule of the stiffness (:data:`liegroup_int.iga.quadrature.RULES`) with
         ``integration = "reduced"``.
+    bodies : tuple of EndBody
+        Rigid bodies fixed to the ends (at most one per end): their mass and principal
+        inertia join the end rows of the consistent mass matrices (the B-spline basis
+        interpolates at the ends, so the end values are the body's velocity and material
+        angular velocity), their weight the load vector, their gyroscopic couple the rate.
     """
 
     formulation = "galerkin"
@@ -110,7 +115,8 @@ class GalerkinBeamProblem(BeamBase):
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss-p"):
+                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss-p",
+                 bodies: tuple = ()):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
         self._setup(space, constants, bcs, loads, initial, backend, kelvin_voigt)
@@ -137,6 +143,7 @@ class GalerkinBeamProblem(BeamBase):
         #: ``int mu N_i ds``, ``(n,)``: the linear momentum is ``mass_weights @ v``
         self.mass_weights = gs.weighted_mass(self.mu).sum(axis=0)
         n, m = self.n, self.m
+        self.bodies = self._bodies(bodies, g)
         self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
                      self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
@@ -152,6 +159,10 @@ class GalerkinBeamProblem(BeamBase):
         self.fix_position, self.fix_rotation = fixp, fixr
         self._M_mu = gs.weighted_mass(self.mu)
         self._M_J = tuple(gs.weighted_mass(self.Jm[:, d]) for d in range(3))
+        for row, _, body in self.bodies:
+            self._M_mu[row, row] += body.mass
+            for d in range(3):
+                self._M_J[d][row, row] += body.inertia[d]
         self.mass_position = BandedSPD(self._M_mu, fixp)
         self.mass_theta = BandedSPD(gs.point_mass, fixr)
         self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
@@ -163,6 +174,20 @@ class GalerkinBeamProblem(BeamBase):
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
                                    or self.translating_ends or self.point_loads)
+
+    def _bodies(self, bodies, g: np.ndarray) -> tuple:
+        """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
+        and their weight the load vector."""
+        out = []
+        for b in bodies:
+            if any(b.at == o.at for _, _, o in out):
+                raise ValueError(f"bodies: two bodies at the {b.at}; combine them into one")
+            row, point = (0, 0) if b.at == "start" else (self.n - 1, self.m - 1)
+            self.mass_weights[row] += b.mass
+            self.load_vector[row] += b.mass * g
+            self.has_q = self.has_q or bool(b.mass and np.any(g))
+            out.append((row, point, b))
+        return tuple(out)
 
     @staticmethod
     def _sections(space, constants) -> tuple:
@@ -234,7 +259,7 @@ class GalerkinBeamProblem(BeamBase):
         """The same problem with damping ``tau`` [s]."""
         return GalerkinBeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial,
                                    backend=self.backend, kelvin_voigt=tau, integration=self.integration,
-                                   quadrature=self.quadrature)
+                                   quadrature=self.quadrature, bodies=tuple(b for *_, b in self.bodies))
 
     @property
     def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -357,6 +382,8 @@ class GalerkinBeamProblem(BeamBase):
         T = self.B0.T @ pt - self.B1.T @ (wf * M)
         if self.has_q:
             F += f * self.load_vector
+        for row, _, body in self.bodies:
+            T[row] -= np.cross(y.w[row], np.multiply(body.inertia, y.w[row]))
         for row, point, ld in self.point_loads:
             Re = R[point]
             if np.any(ld.force):
@@ -437,8 +464,10 @@ class GalerkinBeamProblem(BeamBase):
         """Linear momentum and angular momentum about the origin, ``(3,)`` each."""
         c, v, Om = self.B0 @ y.c, self.B0 @ y.v, self.B0 @ y.w
         wf = self.wf[:, None]
-        h = cross(c, self.mu[:, None] * v) + rot(y.R, self.Jm * Om)
-        return self.mass_weights @ y.v, np.sum(wf * h, axis=0)
+        h = np.sum(wf * (cross(c, self.mu[:, None] * v) + rot(y.R, self.Jm * Om)), axis=0)
+        for row, point, body in self.bodies:
+            h += np.cross(y.c[row], body.mass * y.v[row]) + y.R[point] @ np.multiply(body.inertia, y.w[row])
+        return self.mass_weights @ y.v, h
 
     def section_fields(self, y, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
         """Section quantities at the points (:attr:`frame_points`), ``(m, 3)`` each, as

@@ -247,6 +247,36 @@ class EndLoad:
 
 
 @dataclass(frozen=True)
+class EndBody:
+    """A rigid body fixed to one end of the beam, its centre of mass at the end point and
+    its principal axes along the end section's ``d1, d2, d3`` (a tip mass, a hub).
+
+    Parameters
+    ----------
+    at : {"start", "end"}
+        The end it is fixed to.
+    mass : float
+        Mass [kg] (>= 0).
+    inertia : (3,) tuple
+        Principal moments of inertia about the end point, along ``d1, d2, d3`` [kg m^2] (>= 0).
+    """
+
+    at: str = "end"
+    mass: float = 0.0
+    inertia: tuple = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        if self.at not in ("start", "end"):
+            raise ParameterError("at", f"expected 'start' or 'end', got {self.at!r}")
+        if not (np.isfinite(self.mass) and self.mass >= 0.0):
+            raise ParameterError("mass", f"expected a mass >= 0, got {self.mass!r}")
+        J = np.asarray(self.inertia, dtype=float)
+        if J.shape != (3,) or not np.all(np.isfinite(J)) or np.any(J < 0.0):
+            raise ParameterError("inertia", f"expected three moments of inertia >= 0, got {self.inertia!r}")
+        object.__setattr__(self, "inertia", tuple(float(x) for x in J))
+
+
+@dataclass(frozen=True)
 class Loads:
     """External loads.
 

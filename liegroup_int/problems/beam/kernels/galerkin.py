@@ -93,6 +93,8 @@ class GalerkinData(NamedTuple):
     Sinv: np.ndarray  # (3, 3 J, 3 J)
     keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
     jr: np.ndarray  # (3 J,) work
+    body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
+    body_J: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -106,7 +108,8 @@ def unpack(flat, head):
         is_(flat, head, 20) != 0, is_(flat, head, 21) != 0, is_(flat, head, 22) != 0, f2(flat, head, 23),
         i1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27), i1(flat, head, 28),
         i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), i2(flat, head, 32), f3(flat, head, 33),
-        f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37))
+        f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37), i1(flat, head, 38),
+        f2(flat, head, 39))
 
 
 # ====================================================================== action
@@ -305,6 +308,11 @@ def rates(c, v, w, R, K, u, out, d):
             put(o2, j, axpy(-b1, nw, row(o2, j)))
             put(o3, j, add(row(o3, j), sub(scale(b0, p), scale(b1, Mw))))
     power += _point_loads(d, v, w, R, out)
+    for k in range(d.body_row.shape[0]):  # end bodies' gyroscopic couple (no power)
+        r = d.body_row[k]
+        wr = row(w, r)
+        Jw = (d.body_J[k, 0] * wr[0], d.body_J[k, 1] * wr[1], d.body_J[k, 2] * wr[2])
+        put(o3, r, sub(row(o3, r), cross(wr, Jw)))
     _solve(d, w, out)
     if not d.power:
         return 0.0
@@ -377,7 +385,7 @@ def _point_data(pb, loads: np.ndarray, table: LoadTable) -> dict:
 
 
 def _joint_data(pb) -> dict:
-    """The rigid joints' fields of :class:`GalerkinData`."""
+    """The rigid joints' and the end bodies' fields of :class:`GalerkinData`."""
     n, nj = pb.n, len(pb.joints)
     if nj:
         cons = [pb._constraints[k] for k in ("position", "theta", "rotation")]
@@ -386,7 +394,9 @@ def _joint_data(pb) -> dict:
         Y, Sinv = np.zeros((3, 0, n, 3)), np.zeros((3, 0, 0))
     return {"joint_ab": np.array([(j[0], j[1]) for j in pb.joints], dtype=np.int64).reshape(nj, 2),
             "joint_q": np.array([j[3] for j in pb.joints], dtype=float).reshape(nj, 3, 3),
-            "Y": c64(Y), "Sinv": c64(Sinv), "keep": np.zeros((10, 3)), "jr": np.zeros(3 * nj)}
+            "Y": c64(Y), "Sinv": c64(Sinv), "keep": np.zeros((10, 3)), "jr": np.zeros(3 * nj),
+            "body_row": np.array([r for r, _, _ in pb.bodies], dtype=np.int64),
+            "body_J": c64(np.array([b.inertia for _, _, b in pb.bodies], dtype=float).reshape(-1, 3))}
 
 
 def galerkin_data(pb):
