@@ -91,7 +91,7 @@ def run_buckle(scene: Scene, out_dir: Path, n: int = 3, steps: int = 10, refine:
                            "n_ctrl": scene["space.n_ctrl"], "length": pb.space.length},
         "load_time": t, "load_steps": steps, "refine": refine, "refined": res.refined, "note": res.note,
         "at_load_factor": res.at_factor, "refinement_history": res.history, "equilibria": res.iterations + 1,
-        "newton_iterations": res.newton, "applied_loads": {k: v.tolist() for k, v in loads.items()},
+        "newton_iterations": res.newton, "singularity": res.singularity, "applied_loads": {k: v.tolist() for k, v in loads.items()},
         "modes": rows, "cpu_time_s": cpu,
     }
     write_json(out_dir / "summary.json", summary)
@@ -114,7 +114,8 @@ def _print(scene: Scene, s: dict, out: Path) -> None:
 
 
 def main_buckle(args) -> int:
-    """The ``buckle`` command (:mod:`liegroup_int.cli`): exit 0 or 2 (bad input, one line)."""
+    """The ``buckle`` command (:mod:`liegroup_int.cli`): exit 0, 2 (bad input, one line) or
+    3 (the lowest factor not confirmed along the load path; the files are written)."""
     from .scenes import load_scene, parse_override
 
     if args.n < 1:
@@ -130,4 +131,8 @@ def main_buckle(args) -> int:
         print(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     _print(scene, s, out)
+    if s["refine"] and not s["refined"]:
+        print(f"error: {scene.source}: no critical load confirmed along the load path ({s['note']}); the linear "
+              "factors are estimates only (docs/cli.md, buckle)", file=sys.stderr)
+        return 3
     return 0

@@ -28,6 +28,13 @@ singular.
    solver finds no equilibrium: the step is halved, and after :data:`HALVINGS` halvings the
    refinement stops at the last equilibrium (``BucklingResult.note`` says so).
 
+``K_G`` here is the secant of the whole tangent, not only its stress part: when the loads
+turn the beam's stiff axial and shear directions before it buckles (a bending-dominated
+structure such as the 45-degree bend under its transverse load), ``K_G`` carries terms of
+order ``EA`` times the rotation, and the linear factors are small spurious values that the
+refinement does not confirm; a refined factor is only reported as critical when the
+tangent is singular there (:data:`SINGULAR`).
+
 The higher factors are those of the last linearization (about the first critical state
 after refinement). Only real factors are reported: follower loads make ``K`` unsymmetric
 and can lose stability by flutter instead (complex pairs), which a static analysis does
@@ -82,6 +89,19 @@ def prestressed_modes(problem: GalerkinBeamProblem, n: int, static_result: Stati
 #: Times the refinement halves a load step that finds no equilibrium before it stops.
 HALVINGS = 5
 
+#: Largest stiffness of the buckling mode at the refined factor, relative to its stiffness
+#: unloaded (:func:`_stiffness_ratio`), for the tangent to count as singular there. At the
+#: column's Euler load it is ~1e-8 (the secant iteration's tolerance); a structure whose
+#: tangent never becomes singular on its load path (a bending-dominated one) can still let
+#: the secant prediction stall where the tangent is regular, which this rejects.
+SINGULAR = 1e-4
+
+
+def _stiffness_ratio(K: np.ndarray, K0: np.ndarray, phi: np.ndarray) -> float:
+    """``|phi.K phi| / |phi.K0 phi|``: the stiffness of the mode ``phi`` under the load
+    (``K``) relative to its stiffness unloaded (``K0``)."""
+    return float(abs(phi @ K @ phi) / max(abs(phi @ K0 @ phi), 1e-300))
+
 
 @dataclass
 class BucklingResult:
@@ -101,7 +121,13 @@ class BucklingResult:
     state : GalerkinBeamState
         The equilibrium of the last linearization, at load factor ``at_factor``.
     refined : bool
-        The first factor converged to ``rtol`` along the load path.
+        The first factor converged to ``rtol`` along the load path and the tangent is
+        singular there (``singularity <= SINGULAR``).
+    singularity : float
+        The first mode's stiffness at the refined factor relative to unloaded
+        (:func:`_stiffness_ratio`; NaN when not refined).
+    history : list of float
+        The lowest factor predicted at each equilibrium of the refinement.
     iterations : int
         Refinement iterations (equilibria solved after the first load step).
     newton : int
@@ -120,6 +146,7 @@ class BucklingResult:
     iterations: int = 0
     newton: int = 0
     note: str = ""
+    singularity: float = float("nan")
     history: list = field(default_factory=list)
 
 
@@ -184,6 +211,7 @@ def _refine(problem, res: BucklingResult, prev, cur, n, t, load_steps, rtol, max
     """The secant iteration of the module docstring, from the equilibrium ``res.state`` at
     ``cur = (lambda, K)`` with the previous tangent ``prev``; updates ``res``."""
     (lam_p, K_p), (lam, K) = prev, cur
+    K0 = prev[1]
     y = res.state
     for it in range(max_refine + 1):
         factors, phi = critical_factors(K, (K - K_p) / (lam - lam_p), lam, n)
@@ -193,7 +221,11 @@ def _refine(problem, res: BucklingResult, prev, cur, n, t, load_steps, rtol, max
         res.load_factors, res.vectors, res.state, res.at_factor = factors, [expand(v) for v in phi.T], y, lam
         res.history.append(float(factors[0]))
         if abs(factors[0] - lam) <= rtol * abs(factors[0]):
-            res.refined = True
+            res.singularity = _stiffness_ratio(K, K0, phi[:, 0])
+            res.refined = res.singularity <= SINGULAR
+            if not res.refined:
+                res.note = (f"the prediction converged at load factor {lam:.6g} but the tangent is regular there "
+                            f"(mode stiffness {res.singularity:.2g} of the unloaded one)")
             return
         if it == max_refine:
             res.note = f"not converged to rtol {rtol:g} in {max_refine} equilibria"
