@@ -310,10 +310,13 @@ def _linearization(args, scene, n: int, duration: float | None = None):
                                              f"{scene.t_end:g})")
 
 
-def _finer_frequencies(args, scene, n: int):
+def _finer_frequencies(args, scene, n: int, floor: float):
     """The lowest frequencies of the scene on the next finer mesh of its kind (about that
-    mesh's own equilibrium with ``--about static``), near-zero modes left out
-    (:data:`NEAR_ZERO`): ``(freq_hz or None, what was refined or why not)``."""
+    mesh's own equilibrium with ``--about static``), modes with ``|lambda| <= floor`` left
+    out (the near-zero modes of the coarse mesh, :data:`NEAR_ZERO`, by the coarse mesh's
+    ``|lambda|max``: the finer mesh's is larger, and a low physical mode, e.g. a column's
+    bending mode near its buckling load, would fall below its own threshold and shift the
+    pairing): ``(freq_hz or None, what was refined or why not)``."""
     from .problems.beam.statics import StaticDivergence
     from .scenes import KINDS
 
@@ -328,7 +331,7 @@ def _finer_frequencies(args, scene, n: int):
         _, rep, _, _ = _linearization(args, fine, n + 12)  # room for near-zero modes
     except (ValueError, StaticDivergence) as exc:
         return None, f"finer mesh: {exc}"
-    return [m.freq_hz for m in rep.modes if abs(m.lam) > NEAR_ZERO * rep.lam_max], \
+    return [m.freq_hz for m in rep.modes if abs(m.lam) > floor], \
         ", ".join(f"{k} = {v}" for k, v in extra.items())
 
 
@@ -385,13 +388,14 @@ def _modes(args) -> int:
     except StaticDivergence as exc:
         print(f"error: {scene.source}: {exc}", file=sys.stderr)
         return 3
-    finer, estimate = (None, "--no-estimate") if args.no_estimate else _finer_frequencies(args, scene, args.n)
+    floor = NEAR_ZERO * rep.lam_max
+    finer, estimate = (None, "--no-estimate") if args.no_estimate else _finer_frequencies(args, scene, args.n, floor)
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-modes"
     from .io.modes import dominant, plot_modes, real_shapes, write_mode_shapes, write_modes_csv
 
     rows = [{"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
              "im_lambda": m.lam.imag, "growing": m.growing, "dominant": "", "rel_change_finer": "",
-             "near_zero": bool(abs(m.lam) <= NEAR_ZERO * rep.lam_max)} for k, m in enumerate(rep.modes, start=1)]
+             "near_zero": bool(abs(m.lam) <= floor)} for k, m in enumerate(rep.modes, start=1)]
     # the modes above the noise, paired in order with those of the finer mesh
     paired = [r for r in rows if not r["near_zero"]]
     for r, f in zip(paired, finer or []):
