@@ -91,7 +91,8 @@ def run_buckle(scene: Scene, out_dir: Path, n: int = 3, steps: int = 10, refine:
                            "n_ctrl": scene["space.n_ctrl"], "length": pb.space.length},
         "load_time": t, "load_steps": steps, "refine": refine, "refined": res.refined, "note": res.note,
         "at_load_factor": res.at_factor, "refinement_history": res.history, "equilibria": res.iterations + 1,
-        "newton_iterations": res.newton, "singularity": res.singularity, "applied_loads": {k: v.tolist() for k, v in loads.items()},
+        "newton_iterations": res.newton, "singularity": res.singularity,
+        "applied_loads": {k: v.tolist() for k, v in loads.items()},
         "modes": rows, "cpu_time_s": cpu,
     }
     write_json(out_dir / "summary.json", summary)

@@ -221,8 +221,9 @@ def test_modes_about_static_refuses_collocation(tmp_path, capsys):
 def test_modes_about_static_near_the_buckling_load_pairs_the_finer_mesh(tmp_path, capsys):
     """At 0.99 P_cr the first mode (0.4365 Hz, |lambda| = 1.1e-6 |lambda|max) lies below the
     finer mesh's own near-zero threshold; paired by the coarse mesh's threshold, it moves
-    by 5e-6 to 9e-6 on the finer mesh (measured, with 10 and 2 load steps: the meshes' critical loads differ by 1e-9, times
-    1 / (1 - P / P_cr) = 100 in f^2, plus the Jacobian's noise), asserted below 1e-4."""
+    by 5e-6 to 9e-6 on the finer mesh (measured, with 10 and 2 load steps: the meshes'
+    critical loads differ by 1e-9, times 1 / (1 - P / P_cr) = 100 in f^2, plus the
+    Jacobian's noise), asserted below 1e-4."""
     force = float(0.99 * haringx(euler(EI1)))
     assert main(["modes", "column", "--about", "static", "--n", "1", "--steps", "2",
                  "--set", f"loads.end.force=[0, 0, {-force!r}]", "--out", str(tmp_path)]) == 0
