@@ -23,15 +23,20 @@ __all__ = [
     "ActionProblem", "HomogeneousSpace", "Sphere", "TangentSphere", "Stiefel", "Isospectral", "RnSpace",
     "ProductSpace",
     "Solution", "StateRecorder", "DiagnosticsRecorder", "METHODS", "resolve_method",
-    "IntegrationError", "BlowUpError", "__version__", "solve_static",
+    "IntegrationError", "BlowUpError", "__version__", "solve_static", "prestressed_modes", "buckling_loads",
 ]
 
 
 def __getattr__(name):
-    """``solve_static`` (:mod:`liegroup_int.problems.beam.statics`), imported on first use
-    so that ``import liegroup_int`` stays light."""
+    """``solve_static`` (:mod:`liegroup_int.problems.beam.statics`), ``prestressed_modes``
+    and ``buckling_loads`` (:mod:`liegroup_int.problems.beam.buckling`), imported on first
+    use so that ``import liegroup_int`` stays light."""
     if name == "solve_static":
         from .problems.beam.statics import solve_static
 
         return solve_static
+    if name in ("prestressed_modes", "buckling_loads"):
+        from .problems.beam import buckling
+
+        return getattr(buckling, name)
     raise AttributeError(f"module 'liegroup_int' has no attribute {name!r}")

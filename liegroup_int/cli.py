@@ -1,4 +1,4 @@
-"""Command line: ``liegroup-int run|static|scenes|compile ...``.
+"""Command line: ``liegroup-int run|static|modes|buckle|scenes|compile ...``.
 
 Errors in scenes or arguments print one line ``error: ...`` and exit with code 2; a run
 that stops early (blow-up) exits with code 3 after saving what it computed.
@@ -86,6 +86,23 @@ def _parser() -> argparse.ArgumentParser:
     mo.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-modes)")
     mo.add_argument("--no-estimate", action="store_true",
                     help="skip the error estimate (the same modes on the next finer mesh)")
+    mo.add_argument("--about", choices=("initial", "static"), default="initial",
+                    help="linearize about the initial state (default) or about the static equilibrium under the "
+                         "scene's loads at t_end (prestressed modes; beams with space.formulation = \"galerkin\")")
+    mo.add_argument("--steps", type=int, default=10, help="load steps of the static solve with --about static "
+                                                           "(default 10)")
+    bk = sub.add_parser("buckle", help="critical load factors and buckling modes of a beam scene (galerkin)")
+    bk.add_argument("scene", help="scene file or built-in scene name (space.formulation = \"galerkin\")")
+    bk.add_argument("--n", type=int, default=3, help="number of critical load factors (lowest first; default 3)")
+    bk.add_argument("--steps", type=int, default=10,
+                    help="load steps per unit load factor: the linear analysis uses the tangent at 1/N, the "
+                         "refinement follows the load path in steps of at most 1/N (default 10)")
+    bk.add_argument("--no-refine", action="store_true",
+                    help="linear buckling only (no refinement of the lowest factor along the load path)")
+    bk.add_argument("--time", type=float, default=None, metavar="T",
+                    help="time at which the load profiles are evaluated (default: the scene's t_end)")
+    bk.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    bk.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-buckle)")
     co = sub.add_parser("compile", help="compile the kernels of the built-in scenes ahead of the first run")
     co.add_argument("sets", nargs="*", metavar="SET",
                     help="kernel sets to compile (default: those of the built-in scenes as shipped; "
@@ -270,10 +287,37 @@ MODES_UNCONVERGED = 1e-3
 NEAR_ZERO = 1e-6
 
 
-def _finer_frequencies(args, scene, n: int):
-    """The lowest frequencies of the scene on the next finer mesh of its kind, near-zero
-    modes left out (:data:`NEAR_ZERO`): ``(freq_hz or None, what was refined or why not)``."""
+def _linearization(args, scene, n: int, duration: float | None = None):
+    """The modal analysis of ``modes``: ``(sim, report, state, words)``, about the initial
+    state at t = 0 or (``--about static``) about the static equilibrium under the loads at
+    ``t_end`` (:func:`~liegroup_int.problems.beam.buckling.prestressed_modes`); ``words``
+    say which, for the header."""
     from .integrators import modal_analysis
+    from .scenes import KINDS
+
+    if args.about == "static":
+        from .static_run import check_scene
+
+        check_scene(scene, "modes --about static")
+    sim = KINDS[scene.kind].build(scene)
+    if args.about == "initial":
+        return sim, modal_analysis(sim.problem, 0.0, sim.y0, n, duration=duration), sim.y0, "at t = 0"
+    from .problems.beam.buckling import prestressed_modes
+
+    pm = prestressed_modes(sim.problem, n, t=scene.t_end, load_steps=args.steps, duration=duration)
+    return sim, pm.report, pm.static.state, (f"about the static equilibrium (load factor 1, "
+                                             f"{sum(pm.static.iterations)} Newton iterations; loads at t = "
+                                             f"{scene.t_end:g})")
+
+
+def _finer_frequencies(args, scene, n: int, floor: float):
+    """The lowest frequencies of the scene on the next finer mesh of its kind (about that
+    mesh's own equilibrium with ``--about static``), modes with ``|lambda| <= floor`` left
+    out (the near-zero modes of the coarse mesh, :data:`NEAR_ZERO`, by the coarse mesh's
+    ``|lambda|max``: the finer mesh's is larger, and a low physical mode, e.g. a column's
+    bending mode near its buckling load, would fall below its own threshold and shift the
+    pairing): ``(freq_hz or None, what was refined or why not)``."""
+    from .problems.beam.statics import StaticDivergence
     from .scenes import KINDS
 
     kind = KINDS[scene.kind]
@@ -283,12 +327,11 @@ def _finer_frequencies(args, scene, n: int):
     if extra is None:
         return None, why
     fine = load_scene(args.scene, {**dict(parse_override(s) for s in args.overrides), **extra})
-    sim = kind.build(fine)
     try:
-        rep = modal_analysis(sim.problem, 0.0, sim.y0, n + 12)  # room for near-zero modes
-    except ValueError as exc:
+        _, rep, _, _ = _linearization(args, fine, n + 12)  # room for near-zero modes
+    except (ValueError, StaticDivergence) as exc:
         return None, f"finer mesh: {exc}"
-    return [m.freq_hz for m in rep.modes if abs(m.lam) > NEAR_ZERO * rep.lam_max], \
+    return [m.freq_hz for m in rep.modes if abs(m.lam) > floor], \
         ", ".join(f"{k} = {v}" for k, v in extra.items())
 
 
@@ -324,35 +367,43 @@ def _modes_table(rows: list[dict], estimate: str) -> None:
 
 
 def _modes(args) -> int:
-    """``modes``: the linearized increment map at the initial state, its lowest modes, and
-    how much they move on the next finer mesh."""
+    """``modes``: the linearized increment map at the initial state (or about the static
+    equilibrium), its lowest modes, and how much they move on the next finer mesh."""
     import numpy as np
 
-    from .integrators import modal_analysis
+    from .problems.beam.statics import StaticDivergence
     from .scenes import KINDS
 
     if args.n < 1:
         raise SceneError(f"modes: --n {args.n}: expected at least one mode")
+    if args.steps < 1:
+        raise SceneError(f"modes: --steps {args.steps}: expected a positive number of load steps")
     scene = _load(args)
-    sim = KINDS[scene.kind].build(scene)
     try:
-        rep = modal_analysis(sim.problem, 0.0, sim.y0, args.n, duration=scene.t_end)
+        sim, rep, state, about = _linearization(args, scene, args.n, duration=scene.t_end)
+    except SceneError:
+        raise
     except ValueError as exc:
         raise SceneError(f"{scene.source}: {exc}") from None
-    finer, estimate = (None, "--no-estimate") if args.no_estimate else _finer_frequencies(args, scene, args.n)
+    except StaticDivergence as exc:
+        print(f"error: {scene.source}: {exc}", file=sys.stderr)
+        return 3
+    floor = NEAR_ZERO * rep.lam_max
+    finer, estimate = (None, "--no-estimate") if args.no_estimate else _finer_frequencies(args, scene, args.n, floor)
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-modes"
     from .io.modes import dominant, plot_modes, real_shapes, write_mode_shapes, write_modes_csv
 
     rows = [{"mode": k, "freq_hz": m.freq_hz, "damping_ratio": m.damping_ratio, "re_lambda": m.lam.real,
              "im_lambda": m.lam.imag, "growing": m.growing, "dominant": "", "rel_change_finer": "",
-             "near_zero": bool(abs(m.lam) <= NEAR_ZERO * rep.lam_max)} for k, m in enumerate(rep.modes, start=1)]
+             "near_zero": bool(abs(m.lam) <= floor)} for k, m in enumerate(rep.modes, start=1)]
     # the modes above the noise, paired in order with those of the finer mesh
     paired = [r for r in rows if not r["near_zero"]]
     for r, f in zip(paired, finer or []):
         r["rel_change_finer"] = abs(r["freq_hz"] / f - 1.0)
     shapes = []
-    if sim.mode_shape is not None:
-        shapes = real_shapes([sim.mode_shape(m.vector) for m in rep.modes], [m.freq_hz for m in rep.modes])
+    shape_of = sim.mode_shape if args.about == "initial" else _equilibrium_shape(sim.problem, state)
+    if shape_of is not None:
+        shapes = real_shapes([shape_of(m.vector) for m in rep.modes], [m.freq_hz for m in rep.modes])
         for row, (points, disp, rot) in zip(rows, shapes):
             row["dominant"] = dominant(disp, rot, float(np.max(np.ptp(points, axis=0))) or 1.0)
     out.mkdir(parents=True, exist_ok=True)
@@ -360,16 +411,24 @@ def _modes(args) -> int:
     if shapes:
         made += write_mode_shapes(out, shapes)
         labels = [f"mode {r['mode']}: {r['freq_hz']:.4g} Hz ({r['dominant']})" for r in rows]
-        made.append(plot_modes(out / "modes.png", shapes, labels, title=f"{scene.name}: mode shapes at t = 0"))
-    print(f"{scene.name}: {len(rows)} lowest modes of the linearization at t = 0 ({rep.size} unknowns; "
+        made.append(plot_modes(out / "modes.png", shapes, labels, title=f"{scene.name}: mode shapes "
+                               + ("at t = 0" if args.about == "initial" else "about the static equilibrium")))
+    print(f"{scene.name}: {len(rows)} lowest modes of the linearization {about} ({rep.size} unknowns; "
           f"{_zero_modes_text(KINDS[scene.kind], sim, rep)}; |lambda|max = {rep.lam_max:.4g} 1/s)")
     _modes_table(rows, estimate)
     grow = [r for r in rows if r["growing"]]
     if grow:
-        print(f"warning: {scene.source}: {len(grow)} growing mode(s) at t = 0 (Re lambda > 0, growth by more than e "
-              f"over t_end), the fastest {max(r['re_lambda'] for r in grow):.3g} 1/s", file=sys.stderr)
+        print(f"warning: {scene.source}: {len(grow)} growing mode(s) {about.split(' (')[0]} (Re lambda > 0, growth by "
+              f"more than e over t_end), the fastest {max(r['re_lambda'] for r in grow):.3g} 1/s", file=sys.stderr)
     print(f"-> {out} ({', '.join(p.name for p in made[:1] + made[-1:])}{', mode_XX.vtu, modes.pvd' if shapes else ''})")
     return 0
+
+
+def _equilibrium_shape(problem, state):
+    """Mode shapes on the centreline of an equilibrium ``state`` (beams)."""
+    from .scenes.beam import mode_shape
+
+    return mode_shape(problem, state)
 
 
 def _compile(args) -> int:
@@ -421,6 +480,10 @@ def main(argv: list[str] | None = None) -> int:
             return main_static(args)
         if args.command == "modes":
             return _modes(args)
+        if args.command == "buckle":
+            from .buckle_run import main_buckle
+
+            return main_buckle(args)
         if args.command == "bench":
             return _bench(args)
         if args.command == "plot":

@@ -30,17 +30,23 @@ class StaticFailed(RuntimeError):
     """A load step did not converge; the files describe the last converged one."""
 
 
-def _problem(scene: Scene):
-    """The scene's beam problem (the ``static`` command loads the scene with the NumPy
-    backend: the solver evaluates the forces in NumPy and a compiled action would only add
-    a compilation)."""
+def check_scene(scene: Scene, command: str = "static") -> None:
+    """One-line refusal of a scene the static solver cannot take (not a beam, not the
+    Galerkin formulation), naming ``command``."""
+    if scene.kind != "beam":
+        raise SceneError(f"{scene.source}: {command} needs a beam scene (problem = \"beam\"), not {scene.kind!r}")
+    if scene["space.formulation"] != "galerkin":
+        raise SceneError(f'{scene.source}: {command} needs space.formulation = "galerkin" '
+                         f'(got "{scene["space.formulation"]}")')
+
+
+def static_problem(scene: Scene, command: str = "static"):
+    """The scene's beam problem, after :func:`check_scene` (the ``static`` and ``buckle``
+    commands load the scene with the NumPy backend: the solver evaluates the forces in
+    NumPy and a compiled action would only add a compilation)."""
     from .scenes.beam import problem
 
-    if scene.kind != "beam":
-        raise SceneError(f"{scene.source}: static needs a beam scene (problem = \"beam\"), not {scene.kind!r}")
-    if scene["space.formulation"] != "galerkin":
-        raise SceneError(f'{scene.source}: static needs space.formulation = "galerkin" '
-                         f'(got "{scene["space.formulation"]}")')
+    check_scene(scene, command)
     return problem(scene)
 
 
@@ -72,7 +78,7 @@ def run_static(scene: Scene, out_dir: Path, steps: int = 10, tol: float = 1e-8, 
 
     Raises :class:`SceneError` on bad input (one line) and :class:`StaticFailed` when a
     load step does not converge (after writing the last converged state)."""
-    pb = _problem(scene)
+    pb = static_problem(scene)
     t = scene.t_end if t is None else float(t)
     printer = _Printer(steps, not quiet)
     clock = time.process_time()

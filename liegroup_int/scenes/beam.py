@@ -724,16 +724,16 @@ def build(scene: Scene) -> Simulation:
                      final_state=final_state, info=info, snapshot=ShapeRecorder(pb.space),
                      to_arrays=lambda y: y.arrays(), from_arrays=lambda a: type(y0)(**a),
                      conserved=pb.mechanical_energy, stability=stability(scene, pb),
-                     frames=_frames(pb, fields), mode_shape=_mode_shape(pb, y0),
+                     frames=_frames(pb, fields), mode_shape=mode_shape(pb, y0),
                      fields=(lambda y: {f"section_{k}": v for k, v in pb.section_fields(y, fields).items()})
                      if fields else None)
     return sim
 
 
-def _mode_shape(pb: BeamProblem, y0, n_points: int = 101):
+def mode_shape(pb: BeamProblem, y0, n_points: int = 101):
     """``Simulation.mode_shape``: a mode's position and rotation increments (control values,
-    ``vector[0]`` and ``vector[1]``, complex) on the centreline of the initial state ``y0``
-    at ``n_points`` parameters."""
+    ``vector[0]`` and ``vector[1]``, complex) on the centreline of the state ``y0`` (the
+    initial state; an equilibrium for modes about it) at ``n_points`` parameters."""
     P = pb.space.point_matrix(np.linspace(0.0, 1.0, n_points))
     ref = P @ np.asarray(y0.c, dtype=float)
     return lambda vec: (ref, P @ np.asarray(vec[0]), P @ np.asarray(vec[1]))

@@ -164,13 +164,17 @@ class _System:
         """``y`` moved by the free increments ``x`` on the group."""
         return self.pb.action(self.dofs.expand(x), y)
 
-    def tangent(self, y: GalerkinBeamState, lam: float, r0: np.ndarray):
-        """Sparse forward-difference Jacobian ``d r / d x`` (CSC), one residual evaluation
-        per column group and unknown type (6 per group)."""
+    def tangent(self, y: GalerkinBeamState, lam: float, r0: np.ndarray, central: bool = False):
+        """Sparse finite-difference Jacobian ``d r / d x`` (CSC), one residual evaluation
+        per column group and unknown type (6 per group): forward differences from the
+        residual ``r0`` at ``y``, or with ``central`` two-sided differences (12 per group)
+        with steps :data:`CENTRAL_STEP` (truncation ``O(h^2)`` instead of ``O(h)``: the
+        tangent of the eigenvalue analyses, :func:`tangent_matrix`)."""
         import scipy.sparse
 
         d = self.dofs
         self.tangents += 1
+        steps = self.steps * (CENTRAL_STEP / np.sqrt(np.finfo(float).eps)) if central else self.steps
         rows, cols, vals = [], [], []
         for group in d.groups:
             in_group = np.isin(d.row, group)
@@ -180,21 +184,68 @@ class _System:
                     if sel.size == 0:
                         continue
                     x = np.zeros(d.size)
-                    x[sel] = self.steps[sel]
-                    dr = (self.residual(self.move(y, x), lam) - r0)
+                    x[sel] = steps[sel]
+                    if central:
+                        dr = 0.5 * (self.residual(self.move(y, x), lam) - self.residual(self.move(y, -x), lam))
+                    else:
+                        dr = self.residual(self.move(y, x), lam) - r0
                     for j in sel:
                         hit = np.flatnonzero(d.pattern[d.row, d.row[j]])
                         rows.append(hit)
                         cols.append(np.full(hit.size, j))
-                        vals.append(dr[hit] / self.steps[j])
+                        vals.append(dr[hit] / steps[j])
         return scipy.sparse.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                                        shape=(d.size, d.size))
 
 
+#: Relative step of the central-difference tangent (times the reference length for
+#: positions): about the cube root of the machine epsilon, which balances the truncation
+#: ``h^2`` against the round-off ``eps / h``.
+CENTRAL_STEP = 6e-6
+
+
+@dataclass
+class Tangent:
+    """The tangent of the static residual at one state (:func:`tangent_matrix`).
+
+    Attributes
+    ----------
+    matrix : ndarray, shape (size, size)
+        ``d r / d x``: free generalized forces (``r``: forces on positions, material couples
+        on rotations) by free increments ``x`` (position control values, right rotation
+        increments). Minus the stiffness: negative definite at a stable equilibrium of
+        conservative loads.
+    expand : callable
+        ``expand(x)``: the increment ``(4, n, 3)`` of free values ``x`` ``(size,)`` (rows 0
+        and 1: position and rotation control values; supported rows zero).
+    load_factor : float
+    """
+
+    matrix: np.ndarray
+    expand: object
+    load_factor: float
+
+
+def tangent_matrix(problem: GalerkinBeamProblem, y: GalerkinBeamState, load_factor: float = 1.0,
+                   t: float = 0.0) -> Tangent:
+    """Dense tangent of the static residual of ``problem`` at ``y`` under the loads at time
+    ``t`` times ``load_factor``, by central differences (:data:`CENTRAL_STEP`), in the
+    unknowns of :func:`solve_static`. ``y``'s velocities are ignored."""
+    _check(problem, 1, 1.0, 1)
+    system = _System(problem, t)
+    y = y.copy()
+    y.v[:] = 0.0
+    y.w[:] = 0.0
+    J = system.tangent(y, load_factor, None, central=True).toarray()
+    return Tangent(J, system.dofs.expand, float(load_factor))
+
+
 def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: float = 1e-8, max_iter: int = 30,
-                 t: float = 0.0, progress=None, y0: GalerkinBeamState | None = None) -> StaticResult:
-    """Static equilibrium of ``problem`` under its loads at time ``t`` (profiles included),
-    applied in ``load_steps`` equal steps of the load factor ``lambda = k / load_steps``.
+                 t: float = 0.0, progress=None, y0: GalerkinBeamState | None = None,
+                 load_factor: float = 1.0, from_factor: float = 0.0) -> StaticResult:
+    """Static equilibrium of ``problem`` under its loads at time ``t`` (profiles included)
+    times ``load_factor``, applied in ``load_steps`` equal steps of the load factor from
+    ``from_factor``: ``lambda = from_factor + (load_factor - from_factor) k / load_steps``.
 
     Parameters
     ----------
@@ -215,6 +266,11 @@ def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: flo
         evaluation of a Newton iterate (``residual`` relative).
     y0 : GalerkinBeamState, optional
         Starting configuration (default: the reference); its velocities are ignored.
+    load_factor : float
+        The final load factor (default 1: the loads as given).
+    from_factor : float
+        The load factor at which ``y0`` is in equilibrium (default 0: the reference
+        configuration is unloaded); the first step goes from it.
 
     Returns
     -------
@@ -228,6 +284,8 @@ def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: flo
         A load step did not converge (the result up to the last converged step attached).
     """
     _check(problem, load_steps, tol, max_iter)
+    if not (np.isfinite(load_factor) and np.isfinite(from_factor)):
+        raise ValueError(f"static: load factors: expected finite numbers, got {from_factor!r} to {load_factor!r}")
     system = _System(problem, t)
     y = (y0 if y0 is not None else problem.initial_state()).copy()
     y.v[:] = 0.0
@@ -236,13 +294,13 @@ def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: flo
     res = StaticResult(state=y, load_norm=load)
     scale = load if load > 0 else 1.0
     for k in range(1, load_steps + 1):
-        lam = k / load_steps
+        lam = from_factor + (load_factor - from_factor) * k / load_steps
         y, hist, ok, why = _newton(system, y, lam, scale, tol, max_iter,
                                    (lambda it, r, k=k, lam=lam: progress(k, lam, it, r)) if progress else None)
         res.residuals.append(hist)
         res.tangents, res.evaluations = system.tangents, system.evaluations
         if not ok:
-            last = res.load_factors[-1] if res.load_factors else 0.0
+            last = res.load_factors[-1] if res.load_factors else from_factor
             raise StaticDivergence(f"static: no equilibrium at load factor {lam:.4g} (step {k} of {load_steps}): "
                                    f"residual {hist[-1]:.3e} after iteration {len(hist) - 1} ({why}, tol {tol:.1e}); "
                                    f"last converged load factor {last:.4g}", res)
