@@ -249,7 +249,7 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
             "stop when the recorded energy magnitude exceeds this factor times its largest earlier value (0: off)",
             "", non_negative),
         Key("output.paraview", "bool", False, "beams: write a VTU file every output.paraview_every and the index "
-            "beam.pvd (about 0.5 ms per file; on in the built-in scenes whose picture is the point)"),
+            "beam.pvd (about 1 ms per file; on in the built-in scenes whose picture is the point)"),
         Key("output.paraview_every", "float", None, "simulated time between ParaView files (default t_end/100); "
             + _STRIDE_RULE, "s", positive),
         Key("output.snapshot_every", "float", None, "simulated time between state snapshots in results.h5, which "
