@@ -12,9 +12,10 @@ Layout of ``results.h5``::
 
 Every dataset is chunked (about 64 KiB per chunk, :func:`chunk_rows`) and resizable along
 its first axis. Outputs are buffered in memory and written in blocks: when
-``flush_outputs`` outputs are pending, when the last write is older than ``flush_s`` seconds, at every checkpoint of the run and at the end. A killed run
-therefore keeps everything up to its last block: it loses at most the outputs of the last
-``flush_s`` seconds (2 s by default), and never more than ``flush_outputs`` (256) of them.
+``flush_outputs`` outputs are pending, when the last write is older than ``flush_s``
+seconds, at every checkpoint of the run and at the end. A killed run therefore keeps
+everything up to its last block: it loses at most the outputs of the last ``flush_s``
+seconds (2 s by default), and never more than ``flush_outputs`` (256) of them.
 """
 
 from __future__ import annotations
