@@ -5,12 +5,15 @@
 Runs the CLI as a user does (``python -m liegroup_int ...`` in a subprocess, numba cache
 warm: one untimed run first) and reports, per case, the process CPU time of the child
 (``resource.getrusage(RUSAGE_CHILDREN)``) and the split that ``summary.json`` records
-(``timing``: setup, integrate, output, plots), with the cost per output row; for the
-``converge`` study, the split of ``study.json`` (``timing``).
+(``timing``: setup, integrate, output, plots), with the cost per output (history) row and
+the bytes the run wrote (``output_bytes``); for the ``converge`` study, the split of
+``study.json`` (``timing``). The pendulum cases give the cost per row with and without
+ParaView: as shipped (snapshots and VTU files every ``t_end/100``) and with a snapshot and
+a VTU file at every row.
 
 Then (unless ``--no-cold``) the first run on an empty numba cache (``NUMBA_CACHE_DIR`` a
 new directory), without and after ``liegroup-int compile``, in wall-clock seconds.
-``--quick``: two short cases, no study, no cold runs.
+``--quick``: four short cases (the pendulum over 0.2 s), no study, no cold runs.
 """
 
 from __future__ import annotations
@@ -41,7 +44,23 @@ CASES = [
     ("heavy_top as shipped (10,000 steps), --no-plots", ["run", "heavy_top", "--quiet", "--no-plots"], "run"),
 ]
 
-QUICK_CASES = [CASES[0], CASES[6]]
+
+def pendulum_cases(t_end: float) -> list[tuple]:
+    """The pendulum over ``t_end`` (2001 rows for 10 s), --no-plots: ParaView on (as shipped)
+    and off, with snapshots and VTU files every t_end/100 (the defaults) and at every row."""
+    base = ["run", "pendulum", "--quiet", "--no-plots", "--set", f"t_end={t_end:g}"]
+    dense = ["--set", "output.snapshot_every=0.005", "--set", "output.paraview_every=0.005"]
+    return [
+        (f"run pendulum, t_end={t_end:g}, --no-plots (ParaView on)", base, "run"),
+        ("  the same, output.paraview=false", base + ["--set", "output.paraview=false"], "run"),
+        ("  the same, ParaView on, snapshot and VTU at every row", base + dense, "run"),
+        ("  the same, output.paraview=false, snapshot at every row",
+         base + dense + ["--set", "output.paraview=false"], "run"),
+    ]
+
+
+CASES += pendulum_cases(10.0)
+QUICK_CASES = [CASES[0], CASES[6]] + pendulum_cases(0.2)
 
 STUDY = ["converge", "heavy_top", "--param", "integrator.dt", "--values", "0.02", "0.01", "0.005", "0.0025", "--set",
          "t_end=1"]
@@ -90,12 +109,13 @@ def case_rows(cases, tmp: Path) -> list[list]:
     for k, (label, args, kind) in enumerate(cases):
         cpu, s = run(args, tmp / f"r{k}" if kind else None)
         if s is None:
-            rows.append([label, f"{cpu:.2f}", "", "", "", "", "", ""])
+            rows.append([label, f"{cpu:.2f}", "", "", "", "", "", "", ""])
             continue
         t = s["timing"]
         per = 1e3 * t["output_s"] / max(1, s["history_rows"])
+        mb = sum(s.get("output_bytes", {}).values()) / 1e6
         rows.append([label, f"{cpu:.2f}", f"{t['setup_s']:.2f}", f"{t['integrate_s']:.2f}", f"{t['output_s']:.3f}",
-                     f"{per:.2f}", f"{t['plots_s']:.2f}", f"{cpu / t['integrate_s']:.1f}x"])
+                     f"{per:.2f}", f"{mb:.3g}", f"{t['plots_s']:.2f}", f"{cpu / t['integrate_s']:.1f}x"])
     return rows
 
 
@@ -115,11 +135,12 @@ def main(argv=None) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         run(["run", "heavy_top", "--quiet", "--no-plots", "--set", "t_end=0.01"], tmp / "warm2")  # numba cache
+        run(["run", "pendulum", "--quiet", "--no-plots", "--set", "t_end=0.01"], tmp / "warm3")
         if not args.quick:
             run(["run", "cantilever", "--quiet", "--no-plots", "--set", "t_end=1e-4", "--set", "output.every=5e-5"],
                 tmp / "warm")
-        print(markdown(["case", "process CPU s", "setup s", "integrate s", "output s", "output ms/row", "plots s",
-                        "CPU / integrate"], case_rows(QUICK_CASES if args.quick else CASES, tmp)))
+        print(markdown(["case", "process CPU s", "setup s", "integrate s", "output s", "output ms/row", "output MB",
+                        "plots s", "CPU / integrate"], case_rows(QUICK_CASES if args.quick else CASES, tmp)))
         if args.quick:
             return
         print()

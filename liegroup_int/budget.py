@@ -1,7 +1,8 @@
 """What a run's outputs will cost, checked before anything is written.
 
-A run records ``n`` outputs (history rows, HDF5 snapshots, VTU files). Before its first
-file, the runner refuses, with one line naming the key to change:
+A run records ``n`` outputs: a history row at each, a state snapshot (HDF5) and a VTU file
+at every few of them (``output.snapshot_every``, ``output.paraview_every``). Before its
+first file, the runner refuses, with one line naming the key to change:
 
 * a fixed step below ``span / MAX_STEPS`` and more than ``MAX_OUTPUTS`` outputs
   (:func:`liegroup_int.scenes.scene.check_counts`);
@@ -32,19 +33,37 @@ TEXT_FLOAT_BYTES = 24
 
 
 class OutputSizes(NamedTuple):
-    """Bytes per output of a run.
+    """Bytes of one output of each kind of a run.
 
     Attributes
     ----------
-    memory : int
-        Held in memory until the end of the run (output time, history row read back for
-        the plots, shapes kept or read back for the shape plot).
-    disk : int
-        Written to disk (CSV row, HDF5 row and snapshot, VTU file).
+    row_memory : int
+        Held in memory per history row until the end of the run (output time, the row
+        read back for the plots).
+    snapshot_memory : int
+        Held in memory per state snapshot (shapes kept, or read back, for the shape plot).
+    row_disk : int
+        Written per history row (CSV row, HDF5 history row).
+    snapshot_disk : int
+        Written per state snapshot (HDF5).
+    paraview_disk : int
+        Written per ParaView file (VTU file and its index entry).
     """
 
-    memory: int
-    disk: int
+    row_memory: int
+    snapshot_memory: int
+    row_disk: int
+    snapshot_disk: int
+    paraview_disk: int
+
+    def memory(self, rows: int, snapshots: int) -> int:
+        """Bytes held in memory by ``rows`` history rows and ``snapshots`` snapshots."""
+        return rows * self.row_memory + snapshots * self.snapshot_memory
+
+    def disk(self, rows: int, snapshots: int, files: int) -> int:
+        """Bytes written by ``rows`` history rows, ``snapshots`` snapshots and ``files``
+        ParaView files."""
+        return rows * self.row_disk + snapshots * self.snapshot_disk + files * self.paraview_disk
 
 
 def _nbytes(arrays: dict) -> int:
@@ -60,13 +79,20 @@ def output_sizes(scene, sim, y0) -> OutputSizes:
     if sim.fields is not None:
         snap += _nbytes(sim.fields(y0))
     keeps_shapes = sim.snapshot is not None and (scene.output.plots or not scene.output.hdf5)
-    memory = 8 + (8 * n_cols if scene.output.plots else 0) + (snap if keeps_shapes else 0)
-    disk = TEXT_FLOAT_BYTES * n_cols + (8 * n_cols + snap if scene.output.hdf5 else 0)
+    row_memory = 8 + (8 * n_cols if scene.output.plots else 0)
+    row_disk = TEXT_FLOAT_BYTES * n_cols + (8 * n_cols if scene.output.hdf5 else 0)
+    paraview = 0
     if scene.output.paraview and sim.frames is not None:
         points, frames, point_data = sim.frames(y0)
         n_float = np.size(points) + np.size(frames) + sum(np.size(a) for a in (point_data or {}).values())
-        disk += TEXT_FLOAT_BYTES * int(n_float) + 1024  # values, XML and the .pvd entry
-    return OutputSizes(memory, disk)
+        paraview = TEXT_FLOAT_BYTES * int(n_float) + 1024  # values, XML and the .pvd entry
+    return OutputSizes(row_memory, snap if keeps_shapes else 0, row_disk, snap if scene.output.hdf5 else 0, paraview)
+
+
+def sparse_count(n: int, stride: int) -> int:
+    """Snapshots (or ParaView files) among ``n`` outputs when every ``stride``-th one and
+    the last are written: ``ceil(n / stride)``."""
+    return -(-n // stride)
 
 
 def available_memory() -> int:
@@ -99,7 +125,8 @@ def _gib(n: float) -> str:
 
 
 def check_budget(scene, sim, y0, t0: float, dt: float | None, every: float, out_dir: Path,
-                 memory: int | None = None, disk: int | None = None) -> int:
+                 memory: int | None = None, disk: int | None = None, snapshot_stride: int = 1,
+                 paraview_stride: int = 1) -> int:
     """Refuse a run whose outputs exceed the counts, the memory or the disk; return their number.
 
     Parameters
@@ -117,6 +144,8 @@ def check_budget(scene, sim, y0, t0: float, dt: float | None, every: float, out_
     out_dir : Path
     memory, disk : int, optional
         Available memory and free disk [bytes] (default: measured).
+    snapshot_stride, paraview_stride : int
+        Outputs from one state snapshot (ParaView file) to the next.
 
     Raises
     ------
@@ -126,15 +155,19 @@ def check_budget(scene, sim, y0, t0: float, dt: float | None, every: float, out_
     span = scene.t_end - t0
     check_counts(scene.source, span, dt, every, scene.output.every)
     n = math.ceil(span / every - 1e-9)
+    snapshots, files = sparse_count(n, snapshot_stride), sparse_count(n, paraview_stride)
     sizes = output_sizes(scene, sim, y0)
     memory = available_memory() if memory is None else memory
-    if n * sizes.memory > MEMORY_FRACTION * memory:
+    held = sizes.memory(n, snapshots)
+    if held > MEMORY_FRACTION * memory:
         raise SceneError(f"{scene.source}: {n} outputs (every {every:g} s over {span:g} s) would hold "
-                         f"{_gib(n * sizes.memory)} in memory, more than half the {_gib(memory)} available; raise "
-                         f"output.every, or set output.plots=false")
+                         f"{_gib(held)} in memory, more than half the {_gib(memory)} available; raise "
+                         f"output.every or output.snapshot_every, or set output.plots=false")
     disk = free_disk(out_dir) if disk is None else disk
-    if n * sizes.disk > disk:
+    written = sizes.disk(n, snapshots, files)
+    if written > disk:
         raise SceneError(f"{scene.source}: {n} outputs (every {every:g} s over {span:g} s) would write "
-                         f"{_gib(n * sizes.disk)}, more than the {_gib(disk)} free in {out_dir}; raise output.every, "
-                         f"or set output.hdf5=false / output.paraview=false")
+                         f"{_gib(written)}, more than the {_gib(disk)} free in {out_dir}; raise output.every "
+                         f"(or output.snapshot_every / output.paraview_every), or set output.hdf5=false / "
+                         f"output.paraview=false")
     return n

@@ -501,7 +501,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
             return _spectrum(scene) if args.spectrum else 0
         if args.command == "run":
-            from .runner import RunError, resume_run, run_scene
+            from .runner import RunError, format_outputs, resume_run, run_scene
 
             if args.no_plots:
                 args.overrides.append("output.plots=false")
@@ -527,6 +527,7 @@ def main(argv: list[str] | None = None) -> int:
                 return 2
             s = res.summary
             print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
+            print(format_outputs(s))
             return 0
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)

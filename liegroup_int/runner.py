@@ -3,6 +3,10 @@
 Files in the output directory:
 
 * ``history.csv`` (streamed rows), ``results.h5`` (history and state snapshots, streamed),
+  and, when asked, the ParaView series ``{problem}.pvd`` + ``paraview/*.vtu``; history rows
+  are written every ``output.every``, state snapshots and ParaView files every
+  ``output.snapshot_every`` / ``output.paraview_every`` (whole multiples of it,
+  :func:`liegroup_int.scenes.output_stride`) and at the last output,
 * ``checkpoint.npz`` (state at the last checkpointed output time),
 * ``summary.json`` (``status = "running"`` from the start, rewritten at every checkpoint with
   its time ``checkpoint_t``; final at the end, also for failed or interrupted runs),
@@ -38,7 +42,7 @@ from .integrators import (BlowUpError, IntegrationError, Stats, integrate_adapti
                           stepper_for)
 from .io import HistoryWriter, write_json
 from .io.checkpoint import read_checkpoint, write_checkpoint
-from .scenes import KINDS, Scene, SceneError, load_scene
+from .scenes import KINDS, Scene, SceneError, load_scene, output_stride
 
 
 class RunError(RuntimeError):
@@ -432,7 +436,8 @@ def _checks(scene: Scene, start: "_Start", out_dir: Path) -> tuple[dict, list]:
     """Refusals before anything is written (SceneError): the outputs' count, memory and disk
     first (cheap), then the guards (a dt beyond the stable step, a spurious growing mode at
     rest). Returns the guards' facts and the warnings, printed on stderr."""
-    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir)
+    check_budget(scene, start.sim, start.y0, start.t0, start.dt, start.every, out_dir,
+                 snapshot_stride=start.snapshot_stride, paraview_stride=start.paraview_stride)
     guard_facts, warnings = start_checks(scene, start.sim, start.tab, start.dt, start.t0, start.y0)
     warnings = list(warnings) + _output_warnings(scene, start)
     for w in warnings:
@@ -463,6 +468,20 @@ class _Start:
     stats: Stats
     every: float
     e0: float | None
+    #: outputs from one state snapshot (one ParaView file) to the next
+    snapshot_stride: int = 1
+    paraview_stride: int = 1
+
+
+def _strides(scene: Scene, every: float, meta: dict | None) -> dict:
+    """``{"snapshot_stride", "paraview_stride"}`` of a run: from the scene's keys, or for
+    a key not given in a resumed run, the run's own (its default depends on ``t_end``,
+    which a resume may change; checkpoints without it wrote every output)."""
+    out = {}
+    for name, given in (("snapshot", scene.output.snapshot_every), ("paraview", scene.output.paraview_every)):
+        key = f"{name}_stride"
+        out[key] = output_stride(given, scene.t_end, every) if given is not None or meta is None else meta.get(key, 1)
+    return out
 
 
 def _start(scene: Scene, resume: dict | None) -> _Start:
@@ -471,14 +490,16 @@ def _start(scene: Scene, resume: dict | None) -> _Start:
     dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
     tab = resolve_method(spec.method)
     if resume is None:
-        return _Start(sim, dt, tab, 0.0, sim.y0, Stats(), record_interval(scene, dt), None)
+        every = record_interval(scene, dt)
+        return _Start(sim, dt, tab, 0.0, sim.y0, Stats(), every, None, **_strides(scene, every, None))
     t0, meta, st = resume["t"], resume["meta"], resume["stats"]
     if scene.t_end <= t0:
         raise SceneError(f"{scene.source}: key 't_end' = {scene.t_end!r}: expected > {t0:.6g}, the checkpoint time")
     stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
                   wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
                   quadrature=st.get("quadrature", 0.0), controller=meta.get("controller"))
-    return _Start(sim, dt, tab, t0, sim.from_arrays(resume["state"]), stats, meta["every"], meta.get("energy0"))
+    return _Start(sim, dt, tab, t0, sim.from_arrays(resume["state"]), stats, meta["every"], meta.get("energy0"),
+                  **_strides(scene, meta["every"], meta))
 
 
 def _output_warnings(scene: Scene, start: _Start) -> list[str]:
@@ -487,9 +508,10 @@ def _output_warnings(scene: Scene, start: _Start) -> list[str]:
     if dt is None or scene.output.every is None or scene.output.every >= dt * (1 - 1e-9):
         return []
     n_out = int(round((scene.t_end - start.t0) / start.every))
+    n_vtu = math.ceil(n_out / start.paraview_stride)
     return [f"{scene.source}: output.every = {scene.output.every:g} s is below the step dt = {dt:g} s: one "
             f"output per step, {n_out} outputs"
-            + (f" (ParaView: {n_out} VTU files)" if scene.output.paraview and start.sim.frames is not None else "")]
+            + (f" (ParaView: {n_vtu} VTU files)" if scene.output.paraview and start.sim.frames is not None else "")]
 
 
 def _quantities(scene: Scene, sim, balance) -> dict:
@@ -519,6 +541,35 @@ class _Outputs:
     observers: list
     last: dict
     output_s: list
+    paraview: object = None
+
+
+def _due(stride: int, every: float, t_last: float) -> Callable[[float], bool]:
+    """``due(t)``: whether the output at ``t`` is one of every ``stride`` outputs of the
+    run's grid (``k every`` with ``k`` a multiple of ``stride``, the same grid for a
+    resumed run) or its last output (``t_last``)."""
+
+    def due(t: float) -> bool:
+        return stride == 1 or round(t / every) % stride == 0 or t >= t_last - 1e-9 * every
+
+    return due
+
+
+class _AtDue:
+    """Observer calling ``inner(t, y)`` at the output times ``due(t)`` selects."""
+
+    def __init__(self, inner, due: Callable[[float], bool]):
+        self.inner, self.due = inner, due
+        self.pvd = getattr(inner, "pvd", None)  # the file named when a write fails
+
+    def __call__(self, t, y):
+        if self.due(t):
+            self.inner(t, y)
+
+
+#: Longest wall time [s] the ParaView index of a run lags behind its files (the HDF5
+#: writer's block time): the index is also written at every checkpoint and at the end.
+PVD_INDEX_S = 2.0
 
 
 def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) -> _Outputs:
@@ -535,25 +586,29 @@ def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) ->
     columns = sim.info.get("columns")
     writer = HistoryWriter(history, quantities, columns, append=resume is not None)
     observers = [writer]
-    h5 = _hdf5_writer(scene, sim, out_dir, resume, quantities, columns, t0 + 1e-9 * every)
+    snapshot_due = _due(start.snapshot_stride, every, scene.t_end)
+    h5 = _hdf5_writer(scene, sim, out_dir, resume, quantities, columns, t0 + 1e-9 * every, snapshot_due)
     if h5 is not None:
         observers.append(h5)
     elif sim.snapshot is not None:  # shapes come from results.h5; without it the plugin keeps them
-        observers.append(sim.snapshot)
+        observers.append(_AtDue(sim.snapshot, snapshot_due))
+    pv = None
     if scene.output.paraview and sim.frames is not None:
         from .io.paraview import FrameSeriesWriter
 
-        pv = FrameSeriesWriter(out_dir, sim.frames, stem=scene.kind)
+        pv = FrameSeriesWriter(out_dir, sim.frames, stem=scene.kind, index_every_s=PVD_INDEX_S)
         if resume is not None:
             pv.resume_after(t0 + 1e-9 * every)
-        observers.append(pv)
+        observers.append(_AtDue(pv, _due(start.paraview_stride, every, scene.t_end)))
     meta = {"source": scene.source, "scene_keys": dict(scene.raw), "every": every, "method": scene.integrator.method,
-            "dt": start.dt, "energy0": e0}
+            "dt": start.dt, "energy0": e0, "snapshot_stride": start.snapshot_stride,
+            "paraview_stride": start.paraview_stride}
     ckpt = Checkpointer(out_dir / "checkpoint.npz", scene.output.checkpoint_every, sim.to_arrays, meta, start.stats)
     ckpt.t_saved = t0 if resume is not None else None  # a resumed run starts from its checkpoint
     ckpt.t_start = t0
-    if h5 is not None:
-        ckpt.flushers.append(h5.flush)
+    for w in (h5, pv):
+        if w is not None:
+            ckpt.flushers.append(w.flush)
     if scene.output.blowup_factor > 0 and "energy" in sim.diagnostics:
         observers.insert(1, EnergyGuard(writer, scene.output.blowup_factor, lambda: ckpt.stats))
     last = {"t": t0, "y": start.y0}  # the last recorded state, for the failure diagnosis
@@ -561,17 +616,19 @@ def _outputs(scene: Scene, start: _Start, out_dir: Path, resume: dict | None) ->
     if balance is not None:  # after the writers, so the failing row is on disk
         observers.append(balance)
     observers.append(ckpt)
-    return _Outputs(history, writer, h5, balance, ckpt, observers, last, [0.0])
+    return _Outputs(history, writer, h5, balance, ckpt, observers, last, [0.0], pv)
 
 
-def _hdf5_writer(scene: Scene, sim, out_dir: Path, resume: dict | None, quantities: dict, columns, t_keep: float):
+def _hdf5_writer(scene: Scene, sim, out_dir: Path, resume: dict | None, quantities: dict, columns, t_keep: float,
+                 snapshot_due: Callable[[float], bool]):
     if not scene.output.hdf5:
         return None
     from .io.hdf5 import Hdf5Writer
 
     attrs = {"scene": dict(scene.raw), "source": scene.source, "version": __version__, "problem": scene.kind}
     snap = sim.to_arrays if sim.fields is None else (lambda y: {**sim.to_arrays(y), **sim.fields(y)})
-    h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, snap, attrs, append=resume is not None)
+    h5 = Hdf5Writer(out_dir / "results.h5", quantities, columns, snap, attrs, append=resume is not None,
+                    snapshot_due=snapshot_due)
     if resume is not None:
         h5.truncate_after(t_keep)
     return h5
@@ -687,16 +744,16 @@ def _write_failed(scene: Scene, exc: WriteFailed, t_checkpoint: float | None, ou
 
 
 def _close_writers(outs: _Outputs) -> str | None:
-    """Close the history and HDF5 writers (writing what they buffer); ``None``, or the
-    first failing write as ``cannot write FILE: ERROR``."""
+    """Close the history, HDF5 and ParaView writers (writing what they buffer); ``None``,
+    or the first failing write as ``cannot write FILE: ERROR``."""
     failed = None
-    for w in (outs.writer, outs.h5):
+    for w in (outs.writer, outs.h5, outs.paraview):
         if w is None:
             continue
         try:
             w.close()
         except CLOSE_ERRORS as exc:
-            failed = failed or _write_error(exc, w.path)
+            failed = failed or _write_error(exc, _file_of(w))
     return failed
 
 
@@ -729,9 +786,51 @@ def _file_of(observer) -> str:
     return "the outputs"
 
 
+def output_bytes(out_dir: Path, stem: str, plots=()) -> dict[str, int]:
+    """Bytes on disk of a run's outputs by kind: ``history.csv``, ``results.h5``,
+    ``paraview`` (``paraview/*.vtu`` and the index ``{stem}.pvd``), ``checkpoint.npz`` and
+    ``plots`` (the files named in ``plots`` and shapes.npz); kinds not on disk are left out."""
+    out_dir = Path(out_dir)
+    sizes = {name: (out_dir / name).stat().st_size for name in ("history.csv", "results.h5", "checkpoint.npz")
+             if (out_dir / name).is_file()}
+    pvd = out_dir / f"{stem}.pvd"
+    if pvd.is_file():
+        sizes["paraview"] = pvd.stat().st_size + sum(f.stat().st_size for f in (out_dir / "paraview").glob("*.vtu"))
+    if plots:
+        drawn = [out_dir / name for name in plots] + [out_dir / "shapes.npz"]
+        sizes["plots"] = sum(f.stat().st_size for f in drawn if f.is_file())
+    return sizes
+
+
+def _size(n: float) -> str:
+    """Bytes in the largest decimal unit below them (``197 kB``, ``1.3 MB``)."""
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{n:.0f} B"
+
+
+def format_outputs(summary: dict) -> str:
+    """One line: the outputs' sizes by kind with their counts, and the output time per
+    history row (``summary.json``'s ``output_bytes``, counts and ``timing``)."""
+    b, parts = summary.get("output_bytes", {}), []
+    for kind, label, count in (("history.csv", "history.csv", f"{summary.get('history_rows', 0)} rows"),
+                               ("results.h5", "results.h5", f"{summary.get('snapshots', 0)} snapshots"),
+                               ("paraview", "ParaView", f"{summary.get('paraview_files', 0)} files"),
+                               ("checkpoint.npz", "checkpoint.npz", ""), ("plots", "plots", "")):
+        if kind in b:
+            parts.append(f"{label} {_size(b[kind])}" + (f" ({count})" if count else ""))
+    rows = max(1, summary.get("history_rows", 0))
+    per_row = 1e3 * summary.get("timing", {}).get("output_s", 0.0) / rows
+    return f"outputs {_size(sum(b.values()))}: {', '.join(parts)}; {per_row:.2f} ms of output per history row"
+
+
 def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dict:
     tail = {"status": end.status, "t_reached": end.t, "checkpoint_t": outs.ckpt.t_saved,
-            "history_rows": outs.writer.rows}
+            "history_rows": outs.writer.rows, "snapshots": outs.h5.snapshots if outs.h5 is not None else 0,
+            "paraview_files": len(outs.paraview.entries) if outs.paraview is not None else 0,
+            "output_strides": {"snapshot": start.snapshot_stride, "paraview": start.paraview_stride},
+            "output_bytes": output_bytes(outs.history.parent, scene.kind)}
     if outs.balance is not None:
         b = outs.balance
         tail["energy_balance"] = {"defect": b.defect, "worst_fraction": b.worst, "energy_scale": b.scale,
@@ -755,13 +854,17 @@ def _plots(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, summary: 
     scale = outs.balance.scale if outs.balance is not None else 0.0
     summary["plots"] = write_plots(out_dir, scene, outs.history, shapes, scale)
     summary["timing"]["plots_s"] = time.perf_counter() - c
+    summary["output_bytes"] = output_bytes(out_dir, scene.kind, summary["plots"])
     write_json(out_dir / "summary.json", summary)
 
 
 #: Scene keys a resumed run may change: the span and what is written, not the model, the
-#: discretization or the method (the checkpoint holds a state of those).
-RESUME_KEYS = ("t_end", "output.plots", "output.paraview", "output.checkpoint_every", "output.blowup_factor",
-               "guard.energy_balance")
+#: discretization or the method (the checkpoint holds a state of those). The intervals of
+#: snapshots and ParaView files may change: both series store their times (``snapshots/t``,
+#: the index's time steps), so a change at the checkpoint leaves them readable; history
+#: rows keep ``output.every``, the grid the resumed run continues on.
+RESUME_KEYS = ("t_end", "output.plots", "output.paraview", "output.paraview_every", "output.snapshot_every",
+               "output.checkpoint_every", "output.blowup_factor", "guard.energy_balance")
 
 
 #: Files whose presence means a directory holds a run.

@@ -5,15 +5,17 @@ Layout of ``results.h5``::
     /                 attrs: scene (JSON of the scene keys), source, version, problem
     /history/t        (m,)      output times
     /history/<name>   (m,)      one dataset per history column (tip_x, energy, ...)
-    /snapshots/t      (m,)
-    /snapshots/<name> (m, ...)  state arrays at output times (beams: c, v, w, R, K, K_s;
-                                rigid bodies: y)
+    /snapshots/t      (k,)
+    /snapshots/<name> (k, ...)  state arrays at the output times a run selects (every output,
+                                or every few: ``output.snapshot_every``; beams: c, v, w, R,
+                                K, K_s; rigid bodies: y)
 
-Every dataset is chunked and resizable along its first axis. Outputs are buffered in memory
-and written in blocks: when ``flush_outputs`` outputs are pending, when the last write is
-older than ``flush_s`` seconds, at every checkpoint of the run and at the end. A killed run
-therefore keeps everything up to its last block: it loses at most the outputs of the last
-``flush_s`` seconds (2 s by default), and never more than ``flush_outputs`` (256) of them.
+Every dataset is chunked (about 64 KiB per chunk, :func:`chunk_rows`) and resizable along
+its first axis. Outputs are buffered in memory and written in blocks: when
+``flush_outputs`` outputs are pending, when the last write is older than ``flush_s``
+seconds, at every checkpoint of the run and at the end. A killed run therefore keeps
+everything up to its last block: it loses at most the outputs of the last ``flush_s``
+seconds (2 s by default), and never more than ``flush_outputs`` (256) of them.
 """
 
 from __future__ import annotations
@@ -30,6 +32,15 @@ import numpy as np
 
 #: Bytes kept free beyond a block's own on the disk of results.h5 (HDF5 metadata).
 HEADROOM = 2**20
+#: Target bytes of a dataset's chunk: HDF5 allocates whole chunks, so a dataset's file
+#: space exceeds its values by less than one chunk (a few snapshots of a beam, not hundreds).
+CHUNK_BYTES = 2**16
+
+
+def chunk_rows(row_bytes: int) -> int:
+    """Rows per chunk of a dataset whose rows take ``row_bytes``: ``CHUNK_BYTES`` worth, 1
+    to 256."""
+    return max(1, min(256, CHUNK_BYTES // max(1, row_bytes)))
 
 
 class Hdf5Writer:
@@ -52,11 +63,19 @@ class Hdf5Writer:
         Largest number of buffered outputs.
     flush_s : float
         Longest time [s] an output stays in the buffer (checked at each output).
+    snapshot_due : callable, optional
+        ``fn(t) -> bool``: whether the output at ``t`` also stores a state snapshot
+        (default: every output does).
+
+    Attributes
+    ----------
+    snapshots : int
+        State snapshots in the file and its buffer.
     """
 
     def __init__(self, path: Path, quantities: Mapping[str, Callable], columns: Mapping[str, list],
                  snapshot: Callable[[object], dict], attrs: Mapping, append: bool = False,
-                 flush_outputs: int = 256, flush_s: float = 2.0):
+                 flush_outputs: int = 256, flush_s: float = 2.0, snapshot_due: Callable[[float], bool] | None = None):
         import h5py
 
         self.path = Path(path)
@@ -71,10 +90,17 @@ class Hdf5Writer:
             self.f.create_group("history")
             self.f.create_group("snapshots")
         self.f.flush()
+        self.snapshot_due = snapshot_due
+        self.snapshots = self._stored("snapshots")
         self.flush_outputs, self.flush_s = int(flush_outputs), float(flush_s)
         self._pending: dict[tuple[str, str], list] = {}
         self._n_pending = 0
         self._last_write = time.perf_counter()
+
+    def _stored(self, group: str) -> int:
+        """Rows of ``group`` in the file."""
+        g = self.f[group]
+        return int(g["t"].shape[0]) if "t" in g else 0
 
     def _buffer(self, group: str, name: str, value) -> None:
         self._pending.setdefault((group, name), []).append(np.array(value, dtype=float))
@@ -86,7 +112,7 @@ class Hdf5Writer:
         if name not in g:
             size = int(np.prod(shape)) if shape else 1
             g.create_dataset(name, shape=(0,) + shape, maxshape=(None,) + shape, dtype="f8",
-                             chunks=(max(1, min(256, 2**20 // max(1, size * 8))),) + shape)
+                             chunks=(chunk_rows(8 * size),) + shape)
         d = g[name]
         n = d.shape[0]
         d.resize(n + block.shape[0], axis=0)
@@ -100,7 +126,7 @@ class Hdf5Writer:
         need = HEADROOM
         for (group, name), values in self._pending.items():
             row = np.asarray(values[0]).nbytes or 8
-            need += row * len(values) + row * max(1, min(256, 2**20 // row))
+            need += row * len(values) + row * chunk_rows(row)
         free = shutil.disk_usage(self.path.parent).free
         if free < need:
             raise OSError(errno.ENOSPC, f"No space left on device ({free} bytes free, {need} needed for the next "
@@ -123,9 +149,11 @@ class Hdf5Writer:
             val = np.atleast_1d(np.asarray(fn(t, y), dtype=float))
             for col, x in zip(self.columns.get(name, [name]), val):
                 self._buffer("history", col, x)
-        self._buffer("snapshots", "t", t)
-        for name, arr in self.snapshot(y).items():
-            self._buffer("snapshots", name, arr)
+        if self.snapshot_due is None or self.snapshot_due(t):
+            self._buffer("snapshots", "t", t)
+            for name, arr in self.snapshot(y).items():
+                self._buffer("snapshots", name, arr)
+            self.snapshots += 1
         self._n_pending += 1
         if self._n_pending >= self.flush_outputs or time.perf_counter() - self._last_write > self.flush_s:
             self.flush()
@@ -141,6 +169,7 @@ class Hdf5Writer:
             for d in g.values():
                 d.resize(keep, axis=0)
         self.f.flush()
+        self.snapshots = self._stored("snapshots")
 
     def close(self) -> None:
         """Write what is buffered and close the file. When the buffer cannot be written

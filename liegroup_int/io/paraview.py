@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import base64
 import os
+import time
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -43,10 +44,8 @@ def _atomic_write(path: Path, text: str) -> None:
 
 def _ascii_values(a: np.ndarray) -> str:
     """Values of ``a`` (any shape) as text; floats with ``repr`` (round-trip) precision."""
-    flat = a.ravel().tolist()
-    if a.dtype.kind == "f":
-        return " ".join(repr(float(x)) for x in flat)
-    return " ".join(str(int(x)) for x in flat)
+    # tolist() gives Python floats and ints, whose str is their shortest round-trip repr
+    return " ".join(map(str, a.ravel().tolist()))
 
 
 def _base64_values(a: np.ndarray) -> str:
@@ -239,8 +238,12 @@ class FrameSeriesWriter:
 
     Each call writes ``out_dir/paraview/{stem}_{k:05d}.vtu`` (:func:`write_beam_vtu`) and
     then rewrites ``out_dir/{stem}.pvd`` listing every file written so far, so the index is
-    valid at any time (a killed run keeps the steps it reached). It knows no model: the
-    arrays come from ``geometry``.
+    valid at any time (a killed run keeps the steps it reached). With ``index_every_s > 0``
+    the index is rewritten only when it is older than that many wall seconds, and at
+    :meth:`flush` / :meth:`close`: a run of many files then does not rewrite a growing index
+    per file (quadratic cost), and a killed run's index lacks at most the files of its last
+    ``index_every_s`` seconds (it always lists whole files). It knows no model: the arrays
+    come from ``geometry``.
 
     Parameters
     ----------
@@ -255,6 +258,9 @@ class FrameSeriesWriter:
         Passed to :func:`write_beam_vtu`.
     stem : str
         File name stem.
+    index_every_s : float
+        Longest wall time [s] the index may lag behind the files written (0: rewritten
+        at every call).
 
     Attributes
     ----------
@@ -264,7 +270,8 @@ class FrameSeriesWriter:
         The index file, ``out_dir/{stem}.pvd``.
     """
 
-    def __init__(self, out_dir, geometry, every_output: bool = True, encoding: str = "ascii", stem: str = "beam"):
+    def __init__(self, out_dir, geometry, every_output: bool = True, encoding: str = "ascii", stem: str = "beam",
+                 index_every_s: float = 0.0):
         if encoding not in ENCODINGS:
             raise ValueError(f"encoding: expected one of {ENCODINGS}, got {encoding!r}")
         self.out_dir = Path(out_dir)
@@ -274,16 +281,24 @@ class FrameSeriesWriter:
         self.pvd = self.out_dir / f"{stem}.pvd"
         self.frames_of, self.every_output, self.encoding = geometry, every_output, encoding
         self.entries: list[tuple[float, str]] = []
+        self.index_every_s = float(index_every_s)
+        self._indexed, self._index_wall = 0, time.perf_counter()
 
     def resume_after(self, t: float) -> None:
-        """Continue the series of an existing index from the entries up to ``t``."""
+        """Continue the series of an existing index from the entries up to ``t``; the
+        series' files past them (written after ``t`` by the run resumed) are removed."""
         import xml.etree.ElementTree as ET
 
-        if not self.pvd.exists():
-            return
-        root = ET.parse(self.pvd).getroot()
-        self.entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")
-                        if float(d.get("timestep")) <= t]
+        if self.pvd.exists():
+            root = ET.parse(self.pvd).getroot()
+            self.entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")
+                            if float(d.get("timestep")) <= t]
+        self._indexed = -1  # the index on disk may list later files: rewrite it at the next flush
+        if self.every_output:
+            kept = {Path(f).name for _, f in self.entries}
+            for path in self.dir.glob(f"{self.stem}_[0-9][0-9][0-9][0-9][0-9].vtu"):
+                if path.name not in kept:
+                    path.unlink()
 
     def __call__(self, t: float, y) -> None:
         k = len(self.entries) if self.every_output else 0
@@ -295,7 +310,20 @@ class FrameSeriesWriter:
             self.entries.append(entry)
         else:
             self.entries = [entry]
-        write_pvd(self.pvd, self.entries)
+            self._indexed = -1
+        if self.index_every_s <= 0 or time.perf_counter() - self._index_wall >= self.index_every_s:
+            self.flush()
+
+    def flush(self) -> None:
+        """Rewrite the index when it lacks files written since its last write."""
+        if self._indexed != len(self.entries):
+            write_pvd(self.pvd, self.entries)
+            self._indexed = len(self.entries)
+        self._index_wall = time.perf_counter()
+
+    def close(self) -> None:
+        """Write the index of every file written (:meth:`flush`)."""
+        self.flush()
 
 
 class BeamParaViewWriter(FrameSeriesWriter):

@@ -38,6 +38,9 @@ class OutputSpec:
     paraview: bool = False
     blowup_factor: float = 1e3
     plots: bool = True
+    #: simulated seconds between VTU files / state snapshots (None: ``t_end / SPARSE_OUTPUTS``)
+    paraview_every: float | None = None
+    snapshot_every: float | None = None
 
 
 @dataclass(frozen=True)
@@ -199,6 +202,41 @@ class ProblemKind:
     constrained: Callable[[Any], int] | None = None
 
 
+#: Default number of ParaView files and of state snapshots of a run: their intervals
+#: default to ``t_end / SPARSE_OUTPUTS`` (history rows stay at ``output.every``).
+SPARSE_OUTPUTS = 100
+
+_STRIDE_RULE = ("rounded to the nearest whole multiple of the recorded interval (output.every, in whole steps), at "
+                "least one; the last output is always written")
+
+
+def output_stride(interval: float | None, t_end: float, every: float) -> int:
+    """Outputs from one ParaView file (or state snapshot) to the next: ``interval``
+    (``None``: ``t_end / SPARSE_OUTPUTS``) as the nearest whole multiple of the record
+    interval ``every`` (halves up), at least 1."""
+    target = t_end / SPARSE_OUTPUTS if interval is None else interval
+    return max(1, math.floor(target / every + 0.5))
+
+
+def check_sparse_every(source: str, values: Mapping[str, Any]) -> None:
+    """``output.paraview_every`` and ``output.snapshot_every``, when given: within
+    ``[output.every, t_end]`` (``output.every`` defaulting to ``t_end / 200``); raises a
+    one-line :class:`SceneError` naming the key."""
+    t_end = values["t_end"]
+    every = values["output.every"]
+    least = every if every is not None else t_end / 200.0
+    shown = "output.every" if every is not None else "output.every (default t_end/200)"
+    for key in ("output.paraview_every", "output.snapshot_every"):
+        v = values[key]
+        if v is None:
+            continue
+        if v > t_end:
+            raise SceneError(f"{source}: key '{key}' = {v!r}: expected <= t_end = {t_end!r}")
+        if v < least * (1 - 1e-9):
+            raise SceneError(f"{source}: key '{key}' = {v!r}: expected >= {shown} = {least:.6g} s (these files are "
+                             f"written at output times)")
+
+
 def common_keys(kind: ProblemKind) -> dict[str, Key]:
     method_names = tuple(sorted(NAMES))
     keys = [
@@ -216,8 +254,12 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("output.blowup_factor", "float", 1e3,
             "stop when the recorded energy magnitude exceeds this factor times its largest earlier value (0: off)",
             "", non_negative),
-        Key("output.paraview", "bool", False, "beams: write a VTU file per output time and the index beam.pvd "
-            "(about 2 ms per output; on in the built-in scenes whose picture is the point)"),
+        Key("output.paraview", "bool", False, "beams: write a VTU file every output.paraview_every and the index "
+            "beam.pvd (about 1 ms per file; on in the built-in scenes whose picture is the point)"),
+        Key("output.paraview_every", "float", None, "simulated time between ParaView files (default t_end/100); "
+            + _STRIDE_RULE, "s", positive),
+        Key("output.snapshot_every", "float", None, "simulated time between state snapshots in results.h5, which "
+            "shapes.png and `plot --times` draw (default t_end/100); " + _STRIDE_RULE, "s", positive),
         Key("output.plots", "bool", True, "draw history.png (and shapes.png) after the run (about 1 s; `--no-plots`)"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
         Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
@@ -304,6 +346,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
     every = v["output.every"]
     if every is not None and every > v["t_end"]:
         raise SceneError(f"{source}: key 'output.every' = {every!r}: expected <= t_end = {v['t_end']!r}")
+    check_sparse_every(source, v)
     if isinstance(dt, float):
         check_counts(source, v["t_end"], dt, max(every if every is not None else v["t_end"] / 200.0, dt), every)
     elif every is not None:
@@ -317,7 +360,8 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         t_end=v["t_end"],
         integrator=IntegratorSpec(v["integrator.method"], dt, rtol, atol),
         output=OutputSpec(every, v["output.quantities"], v["output.hdf5"], v["output.checkpoint_every"],
-                          v["output.paraview"], v["output.blowup_factor"], v["output.plots"]),
+                          v["output.paraview"], v["output.blowup_factor"], v["output.plots"],
+                          v["output.paraview_every"], v["output.snapshot_every"]),
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
         guard=GuardSpec(v["guard.dt"], v["guard.spectrum"], v["guard.energy_balance"]),

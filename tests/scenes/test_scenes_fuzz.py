@@ -4,6 +4,7 @@ Files of any bytes (other encodings, binary, a byte-order mark) and extreme sett
 below the floor, more outputs than the maximum, outputs beyond the memory or the disk) are
 refused in one line with exit code 2 before anything is written."""
 
+import json
 import math
 from pathlib import Path
 
@@ -153,9 +154,9 @@ def test_auto_step_counts_checked_after_the_step_is_known(tmp_path, capsys):
 
 
 def test_disk_estimate_bounds_a_real_run(tmp_path):
-    """The disk per output estimated from the initial state bounds what a pendulum run of
-    500 outputs writes (results.h5, history.csv, VTU files; measured 12.7 kB per output
-    against 16.8 kB estimated): at least all of it, at most 1.5x (text floats are counted
+    """The disk estimated from the initial state bounds what a pendulum run of 500 outputs
+    writes (results.h5, history.csv, VTU files: 501 rows, and at the default t_end/100 101
+    snapshots and 101 VTU files): at least all of it, at most 1.5x (text floats are counted
     at 24 bytes, their longest repr)."""
     from liegroup_int.budget import output_sizes
     from liegroup_int.scenes import KINDS
@@ -167,8 +168,9 @@ def test_disk_estimate_bounds_a_real_run(tmp_path):
                                                                                              "summary.json"))
     scene = load_scene("pendulum", {"t_end": 0.5, "output.every": 1e-3, "output.plots": False})
     sim = KINDS[scene.kind].build(scene)
-    per_output = written / 501
-    assert per_output <= output_sizes(scene, sim, sim.y0).disk <= 1.5 * per_output
+    s = json.loads((out / "summary.json").read_text())
+    assert (s["history_rows"], s["snapshots"], s["paraview_files"]) == (501, 101, 101)
+    assert written <= output_sizes(scene, sim, sim.y0).disk(501, 101, 101) <= 1.5 * written
 
 
 def test_outputs_beyond_memory_or_disk_refused(tmp_path):
@@ -181,12 +183,22 @@ def test_outputs_beyond_memory_or_disk_refused(tmp_path):
     sim = KINDS[scene.kind].build(scene)
     sizes = output_sizes(scene, sim, sim.y0)
     snap = sum(np.asarray(a).nbytes for a in sim.to_arrays(sim.y0).values())
-    assert snap < sizes.memory < snap + 8 * 64  # the shapes, the time, the history row read back for the plot
+    assert sizes.snapshot_memory == snap  # the shapes
+    assert 0 < sizes.row_memory < 8 * 64  # the time, the history row read back for the plot
+    held, written = sizes.memory(1000, 1000), sizes.disk(1000, 1000, 1000)
     args = (scene, sim, sim.y0, 0.0, 1e-3, 1e-3, tmp_path / "out")
-    assert check_budget(*args, memory=2 * 1000 * sizes.memory, disk=1000 * sizes.disk) == 1000
+    assert check_budget(*args, memory=2 * held, disk=written) == 1000
     with pytest.raises(SceneError, match=r"1000 outputs \(every 0.001 s over 1 s\) would hold .* in memory, more "
-                                         r"than half the .* available; raise output.every, or set output.plots=false"):
-        check_budget(*args, memory=2 * 1000 * sizes.memory - 2, disk=10**12)
-    with pytest.raises(SceneError, match=r"would write .*, more than the .* free in .*out; raise output.every, or set "
+                                         r"than half the .* available; raise output.every or output.snapshot_every, "
+                                         r"or set output.plots=false"):
+        check_budget(*args, memory=2 * held - 2, disk=10**12)
+    with pytest.raises(SceneError, match=r"would write .*, more than the .* free in .*out; raise output.every \(or "
+                                         r"output.snapshot_every / output.paraview_every\), or set "
                                          r"output.hdf5=false / output.paraview=false"):
-        check_budget(*args, memory=10**12, disk=1000 * sizes.disk - 1)
+        check_budget(*args, memory=10**12, disk=written - 1)
+    # one snapshot and one VTU file in ten outputs: the budget counts 100 of each
+    assert check_budget(*args, memory=2 * sizes.memory(1000, 100), disk=sizes.disk(1000, 100, 100),
+                        snapshot_stride=10, paraview_stride=10) == 1000
+    with pytest.raises(SceneError, match="would write"):
+        check_budget(*args, memory=10**12, disk=sizes.disk(1000, 100, 100) - 1, snapshot_stride=10,
+                     paraview_stride=10)
