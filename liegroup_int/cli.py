@@ -17,6 +17,16 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="liegroup-int", description="Explicit RKMK integration on Lie groups: rigid bodies and beams.")
     p.add_argument("--version", action="version", version=f"%(prog)s {__import__('liegroup_int').__version__}")
     sub = p.add_subparsers(dest="command", required=True)
+    _add_run_commands(sub)
+    _add_study_commands(sub)
+    _add_result_commands(sub)
+    _add_linear_commands(sub)
+    _add_tool_commands(sub)
+    return p
+
+
+def _add_run_commands(sub) -> None:
+    """``run`` and ``static``: a scene solved in time or at rest."""
     run = sub.add_parser("run", help="run a scene (a TOML path or a built-in name)")
     run.add_argument("scene", nargs="?", default=None,
                      help="scene file or built-in scene name (see `liegroup-int scenes`); optional with --resume")
@@ -40,6 +50,10 @@ def _parser() -> argparse.ArgumentParser:
     stt.add_argument("--time", type=float, default=None, metavar="T",
                      help="time at which the load profiles are evaluated (default: the scene's t_end)")
     stt.add_argument("--quiet", action="store_true", help="no per-step residuals")
+
+
+def _add_study_commands(sub) -> None:
+    """``validate``, ``converge`` and ``sweep``: checks and studies of a scene."""
     val = sub.add_parser("validate", help="check a scene without running it")
     val.add_argument("scene")
     val.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -65,6 +79,10 @@ def _parser() -> argparse.ArgumentParser:
                         help="address of a running Dask scheduler (default: a local cluster of processes)")
         st.add_argument("--workers", type=int, default=2, help="local cluster size")
         st.add_argument("--serial", action="store_true", help="run in this process, without Dask")
+
+
+def _add_result_commands(sub) -> None:
+    """``plot`` and ``bench``: pictures of runs, work-precision."""
     pl = sub.add_parser("plot", help="plot a run directory (history, deformed shapes) as PNG and PDF")
     pl.add_argument("dir", type=Path, help="output directory of a run")
     pl.add_argument("--times", type=float, nargs="+", default=None, metavar="T",
@@ -79,6 +97,10 @@ def _parser() -> argparse.ArgumentParser:
                     help="skip our runs predicted to need more CPU seconds than this")
     be.add_argument("--out", type=Path, default=None, help="output directory (default: bench/SCENE)")
     be.add_argument("--fresh", action="store_true", help="recompute instead of reusing cached runs")
+
+
+def _add_linear_commands(sub) -> None:
+    """``modes`` and ``buckle``: linearizations of a beam scene."""
     mo = sub.add_parser("modes", help="natural frequencies, damping ratios and mode shapes at the initial state")
     mo.add_argument("scene")
     mo.add_argument("--n", type=int, default=10, help="number of modes (lowest |lambda| first; default 10)")
@@ -103,6 +125,10 @@ def _parser() -> argparse.ArgumentParser:
                     help="time at which the load profiles are evaluated (default: the scene's t_end)")
     bk.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     bk.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-buckle)")
+
+
+def _add_tool_commands(sub) -> None:
+    """``compile`` and ``scenes``."""
     co = sub.add_parser("compile", help="compile the kernels of the built-in scenes ahead of the first run")
     co.add_argument("sets", nargs="*", metavar="SET",
                     help="kernel sets to compile (default: those of the built-in scenes as shipped; "
@@ -112,7 +138,6 @@ def _parser() -> argparse.ArgumentParser:
     co.add_argument("--list", action="store_true", help="list the kernel sets")
     sc = sub.add_parser("scenes", help="list the built-in scenes")
     sc.add_argument("--reference", action="store_true", help="print the scene key reference (Markdown)")
-    return p
 
 
 def _claim(out: Path, overwrite: bool, scene: str) -> None:
@@ -457,79 +482,88 @@ def _compile(args) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = _parser()
-    args = parser.parse_args(argv)
+def _scenes(args) -> int:
+    if args.reference:
+        from .scenes.reference import schema_markdown
+
+        print(schema_markdown())
+        return 0
+    for name, desc in builtin_descriptions().items():
+        print(f"{name:24s} {desc}")
+    return 0
+
+
+def _static(args) -> int:
+    from .static_run import main_static
+
+    return main_static(args)
+
+
+def _buckle(args) -> int:
+    from .buckle_run import main_buckle
+
+    return main_buckle(args)
+
+
+def _plot(args) -> int:
+    from .io import plot_run
+
     try:
-        if args.command == "scenes":
-            if args.reference:
-                from .scenes.reference import schema_markdown
+        made = plot_run(args.dir, args.times)
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print("\n".join(str(p) for p in made))
+    return 0
 
-                print(schema_markdown())
-                return 0
-            for name, desc in builtin_descriptions().items():
-                print(f"{name:24s} {desc}")
-            return 0
-        if args.command in ("converge", "sweep"):
-            return _study(args)
-        if args.command == "compile":
-            return _compile(args)
-        if args.command == "static":
-            from .static_run import main_static
 
-            return main_static(args)
-        if args.command == "modes":
-            return _modes(args)
-        if args.command == "buckle":
-            from .buckle_run import main_buckle
+def _validate(args) -> int:
+    scene = _load(args)
+    print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
+    return _spectrum(scene) if args.spectrum else 0
 
-            return main_buckle(args)
-        if args.command == "bench":
-            return _bench(args)
-        if args.command == "plot":
-            from .io import plot_run
 
-            try:
-                made = plot_run(args.dir, args.times)
-            except FileNotFoundError as exc:
-                print(f"error: {exc}", file=sys.stderr)
-                return 2
-            print("\n".join(str(p) for p in made))
-            return 0
-        if args.command == "validate":
+def _run(args) -> int:
+    """``run``: a new run into ``--out`` or the continuation of ``--resume DIR``."""
+    from .runner import RunError, format_outputs, resume_run, run_scene
+
+    if args.no_plots:
+        args.overrides.append("output.plots=false")
+    if args.resume is None and args.scene is None:
+        raise SceneError("run: give a SCENE (or --resume DIR)")
+    try:
+        if args.resume is not None:
+            overrides = dict(parse_override(s) for s in args.overrides)
+            res = resume_run(args.resume, overrides, quiet=args.quiet, scene=args.scene)
+            out = args.resume
+            scene_name = res.summary["scene"]
+        else:
             scene = _load(args)
-            print(f"{scene.source}: ok ({scene.kind}, t_end={scene.t_end:g} s, method={scene.integrator.method})")
-            return _spectrum(scene) if args.spectrum else 0
-        if args.command == "run":
-            from .runner import RunError, format_outputs, resume_run, run_scene
+            out = args.out if args.out is not None else Path("runs") / scene.name
+            scene_name = scene.name
+            res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene))
+    except RunError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 130 if "interrupted" in str(exc) else 3
+    except OSError as exc:  # an output directory or file that cannot be written
+        where = exc.filename if exc.filename else (args.resume or args.out)
+        print(f"error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    s = res.summary
+    print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
+    print(format_outputs(s))
+    return 0
 
-            if args.no_plots:
-                args.overrides.append("output.plots=false")
-            if args.resume is None and args.scene is None:
-                raise SceneError("run: give a SCENE (or --resume DIR)")
-            try:
-                if args.resume is not None:
-                    overrides = dict(parse_override(s) for s in args.overrides)
-                    res = resume_run(args.resume, overrides, quiet=args.quiet, scene=args.scene)
-                    out = args.resume
-                    scene_name = res.summary["scene"]
-                else:
-                    scene = _load(args)
-                    out = args.out if args.out is not None else Path("runs") / scene.name
-                    scene_name = scene.name
-                    res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene))
-            except RunError as exc:
-                print(f"error: {exc}", file=sys.stderr)
-                return 130 if "interrupted" in str(exc) else 3
-            except OSError as exc:  # an output directory or file that cannot be written
-                where = exc.filename if exc.filename else (args.resume or args.out)
-                print(f"error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
-                return 2
-            s = res.summary
-            print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
-            print(format_outputs(s))
-            return 0
+
+#: What each subcommand runs.
+COMMANDS = {"scenes": _scenes, "converge": _study, "sweep": _study, "compile": _compile, "static": _static,
+            "modes": _modes, "buckle": _buckle, "bench": _bench, "plot": _plot, "validate": _validate, "run": _run}
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command](args)
     except SceneError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    return 0
