@@ -42,6 +42,7 @@ from .integrators import (BlowUpError, IntegrationError, Stats, integrate_adapti
                           stepper_for)
 from .io import HistoryWriter, write_json
 from .io.checkpoint import read_checkpoint, write_checkpoint
+from .run_events import EventWatcher, TerminalEvent
 from .scenes import KINDS, Scene, SceneError, load_scene, output_stride
 
 
@@ -426,6 +427,7 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     with SetupNotice(scene.name, enabled=not quiet):
         start = _start(scene, resume)
         guard_facts, warnings = _checks(scene, start, out_dir)
+        watcher = EventWatcher(scene, start.sim, start.tab, start.dt, observer=None)
     if claim is not None:
         claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -436,10 +438,13 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     if compile_s > 2.0 and not quiet:
         print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
     t_loop = time.perf_counter()
-    end = _integrate(scene, start, outs, out_dir, quiet, resumed=resume is not None)
+    end = _integrate(scene, start, outs, out_dir, quiet, resume is not None, watcher)
     loop_s = time.perf_counter() - t_loop
     summary.update(_summary_tail(scene, start, outs, end))
-    if end.status != "ok":
+    if scene.events:
+        summary["events"] = watcher.found
+        summary["stopped_by_event"] = end.event
+    if end.status != "ok" or end.event is not None:
         summary["wall_time_s"] = loop_s
     summary["timing"] = _timing(compile_s, t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
@@ -717,9 +722,12 @@ class _End:
     stats: Stats
     error: str | None
     write_failed: bool = False
+    #: the terminal event that stopped the run
+    event: str | None = None
 
 
-def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet: bool, resumed: bool) -> _End:
+def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet: bool, resumed: bool,
+               watcher: EventWatcher) -> _End:
     """The time loop with the observers at output times; progress at output times only (no
     per-step monitor, so a compiled problem runs the steps between two outputs in one call
     of the engine). Failures, a failing write among them, are caught, diagnosed and
@@ -727,12 +735,18 @@ def _integrate(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, quiet
     t0, y0, stats = start.t0, start.y0, start.stats
     progress = Progress(t0, scene.t_end, enabled=not quiet and sys.stderr.isatty())
     observer = _observer(outs, progress, stats, skip_first=resumed)
+    watcher.observer = observer
     old_handlers = _install_signal_handlers(outs.ckpt)
     end = _End("ok", t0, y0, stats, None)
     try:
-        t, y, stats = _loop(scene, start, observer)
-        outs.ckpt.save(t, y)
-        end = _End("ok", t, y, stats, None)
+        try:
+            t, y, stats = _loop(scene, start, watcher)
+            outs.ckpt.save(t, y)
+            end = _End("ok", t, y, stats, None)
+        except TerminalEvent as ev:  # the row and checkpoint at the event, then stop there
+            observer(ev.t, ev.y)
+            outs.ckpt.save(ev.t, ev.y)
+            end = _End("ok", ev.t, ev.y, stats, None, event=ev.name)
     except Interrupted as exc:
         end = _End("interrupted", exc.t, y0, stats,
                    f"{scene.name}: {exc}; resume with: liegroup-int run {scene.source.removeprefix('builtin:')} "

@@ -44,6 +44,42 @@ class OutputSpec:
 
 
 @dataclass(frozen=True)
+class EventSpec:
+    """One ``[[events]]`` entry: the zeros of ``quantity - value`` (a history column),
+    crossing in ``direction`` (-1 falling, +1 rising, 0 both); ``terminal`` stops the run
+    at the first."""
+
+    name: str
+    quantity: str
+    value: float = 0.0
+    direction: int = 0
+    terminal: bool = False
+
+
+#: Keys of one ``[[events]]`` entry.
+EVENT_KEYS = {
+    "name": Key("name", "str", "", "name of the event (default: quantity and value)"),
+    "quantity": Key("quantity", "str", REQUIRED, "a history column of a recorded quantity, e.g. tip_z or energy"),
+    "value": Key("value", "float", 0.0, "the level whose crossings are the events"),
+    "direction": Key("direction", "str", "both", "crossings counted", choices=("falling", "rising", "both")),
+    "terminal": Key("terminal", "bool", False, "stop the run at the first event"),
+}
+
+
+def event_specs(source: str, entries) -> tuple[EventSpec, ...]:
+    """The validated ``[[events]]`` entries (one-line :class:`SceneError` naming the entry)."""
+    out = []
+    for i, entry in enumerate(entries):
+        v = resolve_keys(EVENT_KEYS, entry, f"{source}: events[{i}]")
+        name = v["name"] or f"{v['quantity']} = {v['value']:g}"
+        out.append(EventSpec(name, v["quantity"], v["value"], {"falling": -1, "rising": 1, "both": 0}[v["direction"]],
+                             v["terminal"]))
+    if len({e.name for e in out}) != len(out):
+        raise SceneError(f"{source}: key 'events': two events share a name; give each a name")
+    return tuple(out)
+
+
+@dataclass(frozen=True)
 class GuardSpec:
     """``[guard]``: checks before and during a run (liegroup_int/guards.py)."""
 
@@ -82,6 +118,7 @@ class Scene:
     params: Mapping[str, Any] = field(repr=False)
     raw: Mapping[str, Any] = field(repr=False)
     guard: GuardSpec = field(default_factory=GuardSpec)
+    events: tuple = ()
 
     def __getitem__(self, key: str):
         return self.params[key]
@@ -262,6 +299,9 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
             "shapes.png and `plot --times` draw (default t_end/100); " + _STRIDE_RULE, "s", positive),
         Key("output.plots", "bool", True, "draw history.png (and shapes.png) after the run (about 1 s; `--no-plots`)"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
+        Key("events", "tables", (), "[[events]] entries: quantity (a history column of a recorded quantity, e.g. "
+            "tip_z), value (default 0), direction (falling, rising, both), terminal (stop the run at the first), "
+            "name; each crossing is located on the dense output of the step it falls in and listed in summary.json"),
         Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
         Key("guard.spectrum", "bool", True,
             "refuse a discretization with a growing linearized mode at rest (dense spectrum at the start; "
@@ -365,6 +405,7 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
         params=MappingProxyType(params),
         raw=MappingProxyType(dict(given)),
         guard=GuardSpec(v["guard.dt"], v["guard.spectrum"], v["guard.energy_balance"]),
+        events=event_specs(source, v["events"]),
     )
     if kind.check is not None:
         kind.check(scene)
