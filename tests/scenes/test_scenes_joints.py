@@ -195,7 +195,7 @@ def test_t_frame_statics_balance_at_the_joint():
     f, c = pb.reactions(y)["start"]
     assert np.max(np.abs(f + TIP_FORCE)) <= 1e-10 * F
     assert np.max(np.abs(c + np.cross(tip - foot, TIP_FORCE))) <= 1e-9 * F
-    with pytest.raises(StaticDivergence, match="singular tangent"):
+    with pytest.raises(StaticDivergence, match="no equilibrium at load factor"):
         solve_static(_pb(kind="ball", backend="numpy"), load_steps=2)
 
 
