@@ -145,6 +145,38 @@ class CompileNotice:
         return False
 
 
+#: Seconds of set-up (build, start-up checks) after which a run says on stderr that it is
+#: still setting up.
+SETUP_NOTICE_S = 2.0
+
+
+class SetupNotice:
+    """Says once on stderr that the set-up is still running when it takes longer than
+    :data:`SETUP_NOTICE_S` (a large mesh, a static start, a spectrum): no silent start-up.
+    A context manager; the notice comes from a timer thread, cancelled on exit."""
+
+    def __init__(self, what: str, enabled: bool):
+        self.what, self.enabled, self._timer = what, enabled, None
+
+    def _say(self):
+        print(f"setting up {self.what} (more than {SETUP_NOTICE_S:g} s: building the discretization, start-up "
+              "checks) ...", file=sys.stderr, flush=True)
+
+    def __enter__(self):
+        if self.enabled:
+            import threading
+
+            self._timer = threading.Timer(SETUP_NOTICE_S, self._say)
+            self._timer.daemon = True
+            self._timer.start()
+        return self
+
+    def __exit__(self, *exc):
+        if self._timer is not None:
+            self._timer.cancel()
+        return False
+
+
 def warm_up(problem, tab, t0: float, y0, dt: float | None) -> float:
     """Compile (or load from numba's cache) the engine's loop the run will use, with one
     throw-away step from ``(t0, y0)``; returns the seconds it took (0 without a compiled
@@ -391,8 +423,9 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     """
     out_dir = Path(out_dir)
     clock0 = time.perf_counter()
-    start = _start(scene, resume)
-    guard_facts, warnings = _checks(scene, start, out_dir)
+    with SetupNotice(scene.name, enabled=not quiet):
+        start = _start(scene, resume)
+        guard_facts, warnings = _checks(scene, start, out_dir)
     if claim is not None:
         claim(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -104,3 +104,28 @@ def test_compile_notice_says_so_once_when_numba_compiles(capsys):
         other(1.0)
         other(2)  # a second specialization: still one line
     assert capsys.readouterr().err == CompileNotice.MESSAGE + "\n"
+
+
+def test_a_slow_set_up_says_so(monkeypatch, tmp_path, capsys):
+    """A set-up longer than SETUP_NOTICE_S prints one line on stderr while it runs (here
+    the threshold lowered to 0.05 s and the build slowed by 0.3 s); a quick one, or a quiet
+    run, prints nothing."""
+    import time
+
+    import liegroup_int.runner as runner
+    from liegroup_int.scenes import KINDS, load_scene
+
+    kind = KINDS["rigid_body"]
+    slow = lambda scene, build=kind.build: (time.sleep(0.3), build(scene))[1]  # noqa: E731
+    monkeypatch.setattr(runner, "SETUP_NOTICE_S", 0.05)
+    scene = load_scene("heavy_top", {"t_end": 0.01, "output.every": 0.01, "output.plots": False})
+    runner.run_scene(scene, tmp_path / "quick", quiet=False)
+    assert "setting up" not in capsys.readouterr().err
+    import dataclasses
+
+    monkeypatch.setitem(KINDS, "rigid_body", dataclasses.replace(kind, build=slow))
+    runner.run_scene(scene, tmp_path / "slow", quiet=False)
+    err = capsys.readouterr().err
+    assert err.count("setting up heavy_top (more than 0.05 s") == 1
+    runner.run_scene(scene, tmp_path / "slow_quiet", quiet=True)
+    assert "setting up" not in capsys.readouterr().err

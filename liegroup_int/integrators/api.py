@@ -7,6 +7,7 @@ from typing import Callable
 import numpy as np
 
 from ..groups import LieGroup, Product, Rn
+from ..tableaux.composition import COMPOSITIONS
 from ..tableaux.continuous import continuous_extension
 from .drivers import MAX_INCREMENT_ANGLE, integrate_adaptive, integrate_fixed
 from .events import DenseRun, event_specs
@@ -14,6 +15,7 @@ from .methods import is_commutator_free, resolve_method
 from .observers import StateRecorder
 from .problem import ActionProblem, GroupProblem, Problem
 from .result import Solution, Stats
+from .splitting import integrate_composition
 
 
 def integrate(
@@ -51,7 +53,11 @@ def integrate(
         ``f(t, y)`` in its group's algebra and steps by the group's action on ``y``.
     method : str
         ``"rkmk1"`` (Lie-Euler), ``"rkmk2"``, ``"rkmk3"``, ``"rkmk4"``, ``"rkmk6"``,
-        embedded pairs ``"rkmk32"``, ``"rkmk45"``, ``"rkmk65"``, or a tableau name.
+        embedded pairs ``"rkmk32"``, ``"rkmk45"``, ``"rkmk65"``, or a tableau name; or a
+        symplectic splitting composition, ``"strang"``, ``"yoshida4"``, ``"yoshida6"``
+        (:data:`~liegroup_int.tableaux.composition.COMPOSITIONS`), for a problem with exactly
+        integrable flows (``RigidBody(...).problem()``: the free body and the heavy top), fixed
+        ``dt`` only, output times on the step grid.
     dt : float, optional
         Fixed step. Give either ``dt`` or ``rtol``/``atol`` (adaptive pairs only).
     rtol, atol : float, optional
@@ -110,6 +116,9 @@ def integrate(
     >>> np.allclose(sol.y_final, SO3.exp(np.pi * w))
     True
     """
+    if isinstance(method, str) and method in COMPOSITIONS:
+        return _integrate_split(f, y0, t_span, COMPOSITIONS[method], dt, rtol, atol, t_eval, observer,
+                                dense_output or events is not None or monitor is not None)
     problem, y0 = _problem(f, y0, space, method, coordinates)
     tab = resolve_method(method)
     t0, t_end = float(t_span[0]), float(t_span[1])
@@ -136,6 +145,19 @@ def integrate(
         t, y, stats = integrate_adaptive(problem, tab, (t0, t_end), y0, rtol if rtol is not None else 1e-6,
                                          atol if atol is not None else 1e-9, obs, t_out, **kw)
     return _solution(recorder, run, t, y, stats, tab.name)
+
+
+def _integrate_split(f, y0, t_span, comp, dt, rtol, atol, t_eval, observer, extras: bool) -> Solution:
+    """``integrate`` with a splitting composition (:mod:`.splitting`)."""
+    if not isinstance(f, Problem):
+        raise ValueError(f"method {comp.name!r} is a splitting method: pass a problem with exactly integrable flows "
+                         "(e.g. RigidBody(...).problem()), not a vector field")
+    if rtol is not None or atol is not None or extras:
+        raise ValueError(f"method {comp.name!r}: fixed steps only (dt), without rtol/atol, dense output, events or "
+                         "a monitor")
+    recorder = observer if observer is not None else StateRecorder()
+    t, y, stats = integrate_composition(f, comp, t_span, y0, dt, recorder, t_eval)
+    return _solution(recorder, None, t, y, stats, comp.name)
 
 
 def _problem(f, y0, space, method, coordinates):

@@ -158,17 +158,38 @@ class RigidBodyProblem(GroupProblem):
         super().__init__(SPACE, body.vector_field, compiled)
         self.body = body
 
+    def _plain(self) -> bool:
+        """The problem is the body's own dynamics: no subclass of this class or of
+        :class:`RigidBody` overriding them, ``f`` and ``space`` as built."""
+        cls = type(self.body)
+        return (type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
+                and all(getattr(cls, k) is getattr(RigidBody, k) for k in ("vector_field", "_I", "_mgchi")))
+
     def compiled_kernels(self):
         """The engine's kernels, or ``None`` (generic path) when they would not reproduce
-        this problem: a subclass of this class or of :class:`RigidBody` overriding the
-        dynamics, or ``f``/``space`` replaced."""
-        cls = type(self.body)
-        if not (self._compiled is not None and type(self) is RigidBodyProblem and self.space == SPACE and self.f == self.body.vector_field
-                and all(getattr(cls, k) is getattr(RigidBody, k) for k in ("vector_field", "_I", "_mgchi"))):
+        this problem (:meth:`_plain`)."""
+        if not (self._compiled is not None and self._plain()):
             return None
         from .rigid_body_numba import compiled_problem
 
         return compiled_problem(self.body, SPACE)
+
+    def split_steps(self, y: np.ndarray, h: float, gammas: np.ndarray, n: int) -> np.ndarray:
+        """``n`` steps of length ``h`` of the symmetric composition ``gammas`` of the body's
+        Strang splitting (:mod:`.rigid_body_splitting`: symplectic), from ``y`` ``(..., 12)``;
+        a new array."""
+        if not self._plain():
+            raise ValueError("splitting methods integrate the rigid body's own dynamics; this problem overrides "
+                             "them (use an RKMK method)")
+        from .rigid_body_splitting import advance
+
+        out = np.array(y, dtype=float)
+        I, mgchi = self.body._I, self.body._mgchi
+        for b in out.reshape(-1, 12):
+            R, W = b[:9].reshape(3, 3).copy(), b[9:].copy()
+            advance(R, W, I, mgchi, self.body.mass > 0, np.asarray(gammas, dtype=float), float(h), int(n))
+            b[:9], b[9:] = R.ravel(), W
+        return out
 
 
 def axisymmetric_free_rotation(I1: float, I3: float, R0: np.ndarray, W0: np.ndarray, t: np.ndarray):

@@ -372,11 +372,12 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
 
 
 def load_scene(path_or_name: "str | Path", overrides: Mapping[str, Any] | None = None) -> Scene:
-    """Load a scene file (or a built-in by name), apply dotted overrides and validate."""
-    from .registry import builtin_path
+    """Load a scene file (or a built-in by name), apply dotted overrides and validate. A
+    directory named like a built-in scene (a run's output, say) does not hide it."""
+    from .registry import builtin_names, builtin_path
 
     p = Path(path_or_name)
-    if p.suffix == ".toml" or p.exists():
+    if p.suffix == ".toml" or (p.exists() and not (p.is_dir() and str(path_or_name) in builtin_names())):
         source, default_name = str(p), p.stem
     else:
         p = builtin_path(str(path_or_name))

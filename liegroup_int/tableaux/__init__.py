@@ -20,6 +20,7 @@ This layer depends only on numpy and the standard library.  Public names:
 from .base import ButcherTableau
 from .continuous import ContinuousExtension, continuous_extension
 from .commutator_free import CF3, CF4, CF_REGISTRY, CG3, CG4A, CommutatorFreeTableau
+from .composition import COMPOSITIONS, STRANG, YOSHIDA4, YOSHIDA6, Composition
 from .methods import (
     BS32,
     DP54,
@@ -58,6 +59,11 @@ from .stability import (
 
 __all__ = [
     "ButcherTableau",
+    "Composition",
+    "COMPOSITIONS",
+    "STRANG",
+    "YOSHIDA4",
+    "YOSHIDA6",
     "CommutatorFreeTableau",
     "CF_REGISTRY",
     "CF3",

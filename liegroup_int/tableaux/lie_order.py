@@ -24,34 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .series import series_exp as _exp
+from .series import series_mul as _mul
+from .series import series_scalar_mul as _scalar_mul
+
 #: Relative size of a local-error coefficient that counts as zero.
 TOL = 1e-10
 #: Dimension of the test group GL(N) and the seed of its problem.
 N, SEED = 3, 20240611
-
-
-def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Product of two matrix series, truncated at the common order."""
-    out = np.zeros_like(a)
-    for k in range(a.shape[0]):
-        for j in range(k + 1):
-            out[k] += a[j] @ b[k - j]
-    return out
-
-
-def _scalar_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Product of two scalar series ``(P + 1,)``."""
-    return np.array([sum(a[j] * b[k - j] for j in range(k + 1)) for k in range(a.shape[0])])
-
-
-def _exp(e: np.ndarray) -> np.ndarray:
-    """``exp`` of a matrix series without constant term."""
-    out, term = np.zeros_like(e), np.zeros_like(e)
-    out[0] = term[0] = np.eye(e.shape[1])
-    for m in range(1, e.shape[0]):
-        term = _mul(term, e) / m
-        out += term
-    return out
 
 
 def _field(y: np.ndarray, prob: dict) -> np.ndarray:

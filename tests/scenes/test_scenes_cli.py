@@ -189,3 +189,13 @@ def test_validate_spectrum_flags_a_spurious_growing_mode(capsys):
     out, err = capsys.readouterr()
     assert "kelvin_voigt = auto: tau = " in out and "warning" not in err
     assert float(out.split("spectrum at t=0")[1].split("max Re lambda = ")[1].split()[0]) <= 1e-2
+
+
+def test_a_directory_named_like_a_builtin_does_not_hide_it(tmp_path, monkeypatch):
+    """A run's output directory ``pendulum/`` in the working directory: the name still
+    means the built-in scene; an explicit path to the directory is refused in one line."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "pendulum").mkdir()
+    assert load_scene("pendulum").source == "builtin:pendulum"
+    with pytest.raises(SceneError, match="a directory, not a scene file"):
+        load_scene("./pendulum")
