@@ -1,13 +1,17 @@
-"""Several collocation patches in a chain: the space of a frame of beams.
+"""Several collocation patches joined at their ends: the space of a frame of beams.
 
-Patch ``k`` ends where patch ``k + 1`` starts; the two end control values there are two
-unknowns (one per patch) that the beam plugin keeps equal (a rigid joint, docs/theory.md
-section 13). Every matrix is block-diagonal, one block per patch, so the patches'
-interpolation, derivatives and ``M_c`` solve stay their own.
+By default the patches form a chain: patch ``k`` ends where patch ``k + 1`` starts; the two
+end control values there are two unknowns (one per patch) that the beam plugin keeps equal
+(a rigid joint, docs/theory.md section 13). An explicit list of joints between any two patch
+ends makes any graph (T and X junctions, closed rings, trees); a joint of ``k`` ends is
+``k - 1`` pairs to its first end, each ``"rigid"`` (equal position and rotation) or
+``"ball"`` (equal position, rotations free). Every matrix is block-diagonal, one block per
+patch, so the patches' interpolation, derivatives and ``M_c`` solve stay their own.
 
 Global parameter: patch ``k`` covers ``u in [U_k, U_k+1]`` with ``U_k`` the fraction of the
-total reference length before it, so ``u`` runs over ``[0, 1]`` along the whole chain as
-for one patch (outputs at fractions of the length, shapes, ParaView).
+total reference length before it (patches in the given order), so ``u`` runs over
+``[0, 1]`` along all patches as for one patch (outputs at fractions of the length, shapes,
+ParaView).
 """
 
 from __future__ import annotations
@@ -17,7 +21,12 @@ import numpy as np
 from .collocation import CollocationSpace
 from .nurbs import NurbsCurve, insert_knots
 
-__all__ = ["PatchedSpace", "split_curve"]
+__all__ = ["JOINT_KINDS", "PatchedSpace", "split_curve"]
+
+#: Kinds of joint: equal positions and rotations, or equal positions only.
+JOINT_KINDS = ("rigid", "ball")
+#: Sides of a patch: its start (``u = 0``) and its end (``u = 1``).
+SIDES = ("start", "end")
 
 
 def _block_diag(blocks) -> np.ndarray:
@@ -67,8 +76,16 @@ class PatchedSpace:
     Parameters
     ----------
     spaces : sequence of CollocationSpace
-        The patches in chain order; patch ``k``'s end must coincide with patch
-        ``k + 1``'s start (checked to ``1e-9`` of the total length).
+        The patches; without ``joints`` in chain order, patch ``k``'s end coinciding with
+        patch ``k + 1``'s start (checked to ``1e-9`` of the total length).
+    joints : sequence of ((int, str), (int, str)), optional
+        Explicit joints instead of the chain: pairs of patch ends ``(patch, "start" | "end")``
+        that coincide (checked per pair to ``1e-9`` of the total length). The second end of
+        a pair is joined to the first; it may not be the second end of another pair nor the
+        first end of one (a joint of ``k`` ends is ``k - 1`` pairs to one first end, so the
+        joints form no redundant loop of constraints).
+    kinds : sequence of str, optional
+        Kind of each pair of ``joints``, one of :data:`JOINT_KINDS` (default all rigid).
 
     Attributes
     ----------
@@ -76,8 +93,12 @@ class PatchedSpace:
     offsets : tuple of int
         First global row of each patch (``offsets[-1]`` = ``n_ctrl``).
     joints : tuple of (int, int)
-        Global rows ``(a, b)`` of each joint: the last row of patch ``k`` and the first of
-        patch ``k + 1``.
+        Global rows ``(a, b)`` of each joint pair (chain: the last row of patch ``k`` and
+        the first of patch ``k + 1``).
+    joint_ends : tuple of ((int, str), (int, str))
+        The patch ends of each pair; ``joint_kinds``: their kinds (tuple of str).
+    chain : bool
+        The patches form the implied chain (no explicit ``joints``).
     n_ctrl, degree : int
         Total number of control values; the largest degree.
     N0, N1, N2 : numpy.ndarray, shape (n, n)
@@ -93,23 +114,28 @@ class PatchedSpace:
     bandwidths : tuple of int
     """
 
-    def __init__(self, spaces) -> None:
+    def __init__(self, spaces, joints=None, kinds=None) -> None:
         spaces = tuple(spaces)
         if len(spaces) < 1 or not all(isinstance(s, CollocationSpace) for s in spaces):
             raise ValueError("PatchedSpace needs one or more CollocationSpace patches")
         self.patches = spaces
         lengths = np.array([s.length for s in spaces])
         self.length = float(lengths.sum())
-        for k, (a, b) in enumerate(zip(spaces, spaces[1:])):
-            gap = float(np.linalg.norm(a.c0[-1] - b.c0[0]))
-            if gap > 1e-9 * self.length:
-                raise ValueError(f"patch {k + 1} ends at {np.round(a.c0[-1], 6).tolist()} but patch {k + 2} starts at "
-                                 f"{np.round(b.c0[0], 6).tolist()} ({gap:.3g} apart): joined ends must coincide")
         sizes = [s.n_ctrl for s in spaces]
         self.offsets = tuple(int(v) for v in np.concatenate([[0], np.cumsum(sizes)]))
         self.n_ctrl = self.offsets[-1]
         self.degree = max(s.degree for s in spaces)
-        self.joints = tuple((self.offsets[k + 1] - 1, self.offsets[k + 1]) for k in range(len(spaces) - 1))
+        self.chain = joints is None
+        if self.chain:
+            joints = [((k, "end"), (k + 1, "start")) for k in range(len(spaces) - 1)]
+        self.joint_ends = tuple((tuple(a), tuple(b)) for a, b in joints)
+        kinds = tuple(kinds) if kinds is not None else ("rigid",) * len(self.joint_ends)
+        if len(kinds) != len(self.joint_ends) or any(k not in JOINT_KINDS for k in kinds):
+            raise ValueError(f"kinds: one of {', '.join(JOINT_KINDS)} per joint ({len(self.joint_ends)}), "
+                             f"got {list(kinds)}")
+        self.joint_kinds = kinds
+        self.joints = tuple((self.end_row(*a), self.end_row(*b)) for a, b in self.joint_ends)
+        self._check_joints()
         self._u_edges = np.concatenate([[0.0], np.cumsum(lengths) / self.length])
         self._u_edges[-1] = 1.0
         s_edges = np.concatenate([[0.0], np.cumsum(lengths)])
@@ -125,6 +151,37 @@ class PatchedSpace:
         bw = [s.bandwidths for s in spaces]
         self.bandwidths = (max(b[0] for b in bw), max(b[1] for b in bw))
         self.control_points = _cat([s.curve.control_points for s in spaces])
+
+    def end_row(self, patch: int, side: str) -> int:
+        """Global control row of a patch end (``side`` "start" or "end")."""
+        if not (0 <= int(patch) < len(self.patches)) or side not in SIDES:
+            raise ValueError(f"joint end {(patch, side)!r}: expected (patch index < {len(self.patches)}, "
+                             f"'start' or 'end')")
+        return self.offsets[patch] if side == "start" else self.offsets[patch + 1] - 1
+
+    def _check_joints(self) -> None:
+        """Joined ends coincide; the pairs form stars (no end joined twice, no loop)."""
+        firsts = {a for a, _ in self.joints}
+        seen = set()
+        for k, ((a, b), ends) in enumerate(zip(self.joints, self.joint_ends)):
+            if b in seen or b in firsts or a == b:
+                raise ValueError(f"joint {k + 1}: patch end {ends[1]!r} is joined twice; join each end to one "
+                                 "first end")
+            seen.add(b)
+            pa, pb = self.c0_at(a), self.c0_at(b)
+            gap = float(np.linalg.norm(pa - pb))
+            if gap > 1e-9 * self.length:
+                which = (f"patch {ends[0][0] + 1} ends at {np.round(pa, 6).tolist()} but patch {ends[1][0] + 1} "
+                         f"starts at {np.round(pb, 6).tolist()}") if self.chain else (
+                    f"patch end {ends[0]!r} at {np.round(pa, 6).tolist()} and {ends[1]!r} at "
+                    f"{np.round(pb, 6).tolist()}")
+                raise ValueError(f"{which} ({gap:.3g} apart): joined ends must coincide")
+
+    def c0_at(self, row: int) -> np.ndarray:
+        """Reference position of an end row (a patch's first or last control value), ``(3,)``."""
+        k = int(np.searchsorted(self.offsets, row, side="right") - 1)
+        sp = self.patches[k]
+        return np.asarray(sp.c0[0] if row == self.offsets[k] else sp.c0[-1], dtype=float)
 
     # ------------------------------------------------------------------
     def solve(self, rhs) -> np.ndarray:

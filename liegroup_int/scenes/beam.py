@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..iga import CollocationSpace, NurbsCurve, arc_length, arc_nurbs_quadratic, helix_quarter, k_refine, straight
-from ..iga.patches import PatchedSpace, split_curve
+from ..iga.patches import JOINT_KINDS, PatchedSpace, split_curve
 from ..iga.quadrature import RULES
 from ..problems.beam import (
     BeamProblem,
@@ -143,14 +143,21 @@ KEYS = {
             'as `liegroup-int static`)', choices=("reference", "static")),
         Key("initial.static_steps", "int", 10, 'load steps of the static solve of initial.state = "static"', "",
             _int_between(1, 10000)),
-        Key("beams", "tables", (), "a frame: [[beams]] entries in chain order, each a patch with the keys of "
-            "[geometry] (kind, length, direction, origin, ...), optionally its own n_ctrl and its own section "
-            "([beams.section], [beams.material]: the scene's keys fill in the rest); each beam's end is joined "
-            "rigidly to the next one's start (equal position and rotation, balance of resultants); bc.start and "
-            "bc.end are the chain's ends; replaces [geometry]"),
+        Key("beams", "tables", (), "a frame: [[beams]] entries (members), each a patch with the keys of "
+            "[geometry] (kind, length, direction, origin, ...), a name, optionally its own n_ctrl and its own section "
+            "([beams.section], [beams.material]: the scene's keys fill in the rest); without [[joints]] they form a "
+            "chain, each member's end joined rigidly to the next one's start (equal position and rotation, balance "
+            "of resultants); bc.start is the first member's start and bc.end the last member's end; replaces "
+            "[geometry]"),
+        Key("joints", "tables", (), "[[joints]] entries: joints between any member ends instead of the chain (T and "
+            "X junctions, closed rings, trees; galerkin): ends, the coinciding member ends joined at one point "
+            "(\"<name>.start\" or \"<name>.end\" of named [[beams]] entries, two or more; each end in one joint "
+            "at most, and not a supported end: support a frame through an end of its own), and kind: rigid (equal "
+            "position and rotation, the default) or ball (equal position, rotations free: no couple transmitted)"),
         Key("point_loads", "tables", (), "[[point_loads]] entries: s (fraction of the reference length, inside "
-            "(0, 1)), force and couple (spatial, dead), and a time profile (profile, t_on, t_off, ramp, table); a "
-            "beam is split at s into two patches joined rigidly, where the load acts"),
+            "(0, 1); members in [[beams]] order), force and couple (spatial, dead), and a time profile (profile, "
+            "t_on, t_off, ramp, table); a beam is split at s into two patches joined rigidly, where the load acts "
+            "(with [[joints]]: inside a member only)"),
         Key("bodies", "tables", (), "[[bodies]] entries: rigid bodies fixed to an end of the beam (galerkin): at "
             "(\"start\" or \"end\"), mass [kg], inertia (principal moments about the end point along the end "
             "section's d1, d2, d3 [kg m^2]); the centre of mass at the end point (a tip mass, a hub)"),
@@ -238,6 +245,12 @@ BEAM_KEYS = {
     "n_ctrl": Key("n_ctrl", "int", 0, "control points of this patch (0: space.n_ctrl)", "", lambda v: None if v >= 0 else
                   "an integer >= 0"),
 }
+#: Keys of one ``[[joints]]`` entry.
+JOINT_KEYS = {
+    "ends": Key("ends", "strs", (), "the joined member ends, \"<name>.start\" or \"<name>.end\" (two or more)"),
+    "kind": Key("kind", "str", "rigid", "rigid (position and rotation) or ball (position only)",
+                choices=JOINT_KINDS),
+}
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
     "at": Key("at", "str", "end", "the end the body is fixed to", choices=("start", "end")),
@@ -322,17 +335,8 @@ def _split_at(base: NurbsCurve, frac: float):
     return split_curve(base, 0.5 * (lo + hi))
 
 
-def frame_space(scene: Scene):
-    """The collocation space of the scene, the joint point loads, and one section per patch
-    when a ``[[beams]]`` entry has its own (else None): ``(space, joint_loads, sections)``;
-    one :class:`CollocationSpace` for a single beam without point loads, else a
-    :class:`PatchedSpace` (beams of ``[[beams]]``, split where ``[[point_loads]]`` act;
-    the two pieces of a split share its control points by length, one shared)."""
-    p = scene["space.degree"]
-    # pieces: (get, pre, refined curve, n_ctrl, exact coarse curve or None = not yet built)
-    beams = _pieces(scene)
-    pieces = [(get, pre, _curve(scene, get, pre, n), n, None) for get, pre, n, _ in beams]
-    sections = [sec for *_, sec in beams]
+def _point_load_list(scene: Scene) -> list:
+    """``[(s, index, EndLoad)]`` of the scene's ``[[point_loads]]``, sorted by ``s``."""
     loads = []
     for i, entry in enumerate(scene["point_loads"]):
         v = resolve_keys(POINT_LOAD_KEYS, entry, f"{scene.source}: point_loads[{i}]")
@@ -345,45 +349,143 @@ def frame_space(scene: Scene):
         loads.append((v["s"], i, EndLoad(force=v["force"], couple=v["couple"], force_profile=prof,
                                          couple_profile=prof)))
     loads.sort(key=lambda x: x[0])
-    if len(pieces) == 1 and not loads:
-        get, pre, curve, _, _ = pieces[0]
-        return _space(scene, get, pre, curve), (), sections[0]
-    spaces = [_space(scene, get, pre, c) for get, pre, c, _, _ in pieces]
-    joint_loads = [None] * (len(spaces) - 1)
+    return loads
+
+
+def _split_pieces(scene: Scene, frame: dict, s: float, i: int, load: EndLoad) -> None:
+    """Split the piece of ``frame`` (lists ``pieces, sections, spaces, members,
+    joint_loads``) where the point load ``i`` acts at the fraction ``s``, or put the load on
+    the joint there."""
+    p, spaces, joint_loads = scene["space.degree"], frame["spaces"], frame["joint_loads"]
+    edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in spaces])])
+    edges /= edges[-1]
+    at = int(np.argmin(np.abs(edges - s)))
+    if abs(edges[at] - s) <= 1e-9:  # at a joint
+        if scene["joints"] and frame["members"][at - 1] != frame["members"][at]:
+            raise SceneError(f"{scene.source}: point_loads[{i}]: s = {s!r} is a member end; with [[joints]] a "
+                             "point load acts inside a member")
+        if joint_loads[at - 1] is not None:
+            raise SceneError(f"{scene.source}: point_loads[{i}]: another point load acts at s = {s!r}")
+        joint_loads[at - 1] = load
+        return
+    k = int(np.searchsorted(edges, s) - 1)
+    get, pre, _, n, exact = frame["pieces"][k]
+    exact = exact if exact is not None else _exact_base(scene, get, pre)
+    if exact is None:
+        raise SceneError(f"{scene.source}: point_loads[{i}]: a point load inside a helix beam is not supported; "
+                         "describe the helix as a NURBS (kind = nurbs)")
+    frac = (s - edges[k]) / (edges[k + 1] - edges[k])
+    left, right = _split_at(exact, frac)
+    n_left = max(p + 1, int(round(frac * (n - 1))) + 1)
+    n_right = max(p + 1, n + 1 - n_left)
+    a, b = _curve(scene, get, pre, n_left, left), _curve(scene, get, pre, n_right, right)
+    frame["pieces"][k:k + 1] = [(get, pre, a, n_left, left), (get, pre, b, n_right, right)]
+    for name in ("sections", "members"):
+        frame[name][k:k + 1] = [frame[name][k]] * 2
+    spaces[k:k + 1] = [_space(scene, get, pre, a), _space(scene, get, pre, b)]
+    joint_loads.insert(k, load)
+
+
+def frame_space(scene: Scene):
+    """The collocation space of the scene, the joint point loads, and one section per patch
+    when a ``[[beams]]`` entry has its own (else None): ``(space, joint_loads, sections)``;
+    one :class:`CollocationSpace` for a single beam without point loads or joints, else a
+    :class:`PatchedSpace` (beams of ``[[beams]]``, split where ``[[point_loads]]`` act;
+    the two pieces of a split share its control points by length, one shared; joined in a
+    chain, or as ``[[joints]]`` says: :func:`_graph`)."""
+    beams = _pieces(scene)
+    frame = {"pieces": [(get, pre, _curve(scene, get, pre, n), n, None) for get, pre, n, _ in beams],
+             "sections": [sec for *_, sec in beams], "members": list(range(len(beams)))}
+    loads = _point_load_list(scene)
+    if len(beams) == 1 and not loads and not scene["joints"]:
+        get, pre, curve, _, _ = frame["pieces"][0]
+        return _space(scene, get, pre, curve), (), frame["sections"][0]
+    frame["spaces"] = [_space(scene, get, pre, c) for get, pre, c, _, _ in frame["pieces"]]
+    frame["joint_loads"] = [None] * (len(beams) - 1)
     for s, i, load in loads:
-        edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in spaces])])
-        edges /= edges[-1]
-        at = int(np.argmin(np.abs(edges - s)))
-        if abs(edges[at] - s) <= 1e-9:  # at a joint
-            if joint_loads[at - 1] is not None:
-                raise SceneError(f"{scene.source}: point_loads[{i}]: another point load acts at s = {s!r}")
-            joint_loads[at - 1] = load
-            continue
-        k = int(np.searchsorted(edges, s) - 1)
-        get, pre, _, n, exact = pieces[k]
-        exact = exact if exact is not None else _exact_base(scene, get, pre)
-        if exact is None:
-            raise SceneError(f"{scene.source}: point_loads[{i}]: a point load inside a helix beam is not supported; "
-                             "describe the helix as a NURBS (kind = nurbs)")
-        frac = (s - edges[k]) / (edges[k + 1] - edges[k])
-        left, right = _split_at(exact, frac)
-        n_left = max(p + 1, int(round(frac * (n - 1))) + 1)
-        n_right = max(p + 1, n + 1 - n_left)
-        a, b = _curve(scene, get, pre, n_left, left), _curve(scene, get, pre, n_right, right)
-        pieces[k:k + 1] = [(get, pre, a, n_left, left), (get, pre, b, n_right, right)]
-        sections[k:k + 1] = [sections[k], sections[k]]
-        spaces[k:k + 1] = [_space(scene, get, pre, a), _space(scene, get, pre, b)]
-        joint_loads.insert(k, load)
+        _split_pieces(scene, frame, s, i, load)
+    joint_loads, graph = frame["joint_loads"], {}
+    if scene["joints"]:
+        pairs, kinds, joint_loads = _graph(scene, frame)
+        graph = {"joints": pairs, "kinds": kinds}
     try:
-        space = PatchedSpace(spaces)
+        space = PatchedSpace(frame["spaces"], **graph)
     except ValueError as exc:
-        raise SceneError(f"{scene.source}: key 'beams': {exc}") from None
+        raise SceneError(f"{scene.source}: key '{'joints' if graph else 'beams'}': {exc}") from None
+    sections = frame["sections"]
     if any(sec is not None for sec in sections):
         shared = constants(scene) if any(sec is None for sec in sections) else None
         sections = tuple(sec if sec is not None else shared for sec in sections)
     else:
         sections = None
     return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads), sections
+
+
+def _member_names(scene: Scene) -> list:
+    """Names of the ``[[beams]]`` entries, checked distinct and given (``[[joints]]``)."""
+    if not scene["beams"]:
+        raise SceneError(f"{scene.source}: key 'joints': joins members of [[beams]]; give the frame's members there")
+    names = [str(flatten(e).get("name", "")) for e in scene["beams"]]
+    for i, name in enumerate(names):
+        if not name or names.index(name) != i:
+            raise SceneError(f"{scene.source}: beams[{i}]: key 'name' = {name!r}: [[joints]] needs a distinct name "
+                             "for every member")
+    return names
+
+
+def _graph(scene: Scene, frame: dict) -> tuple:
+    """Joint pairs ``((piece, side), (piece, side))``, their kinds and point loads: the
+    pieces of each split member in a rigid chain, and each ``[[joints]]`` entry's ends
+    joined to its first end (one-line errors naming the entry and key)."""
+    names, members, spaces = _member_names(scene), frame["members"], frame["spaces"]
+    pairs, kinds, loads = [], [], []
+    for k in range(len(members) - 1):
+        if members[k] == members[k + 1]:
+            pairs.append(((k, "end"), (k + 1, "start")))
+            kinds.append("rigid")
+            loads.append(frame["joint_loads"][k])
+    supported = {f"{names[0]}.start": "bc.start", f"{names[-1]}.end": "bc.end"}
+    used: dict = {}
+    for i, entry in enumerate(scene["joints"]):
+        where = f"{scene.source}: joints[{i}]"
+        v = resolve_keys(JOINT_KEYS, entry, where)
+        if len(v["ends"]) < 2:
+            raise SceneError(f"{where}: key 'ends': expected two or more member ends, e.g. [\"a.end\", \"b.start\"]")
+        ends = []
+        for e in v["ends"]:
+            ends.append(_joint_end(scene, where, e, names, members, used, supported))
+            used[e] = i
+        pos = [np.asarray(spaces[k].c0[0 if side == "start" else -1]) for k, side in ends]
+        total = sum(sp.length for sp in spaces)
+        for e, x in zip(v["ends"][1:], pos[1:]):
+            gap = float(np.linalg.norm(x - pos[0]))
+            if gap > 1e-9 * total:
+                raise SceneError(f"{where}: key 'ends': {e!r} at {np.round(x, 6).tolist()} is {gap:.3g} m from "
+                                 f"{v['ends'][0]!r} at {np.round(pos[0], 6).tolist()}; joined ends must coincide")
+        pairs += [(ends[0], e) for e in ends[1:]]
+        kinds += [v["kind"]] * (len(ends) - 1)
+        loads += [None] * (len(ends) - 1)
+    return pairs, kinds, loads
+
+
+def _joint_end(scene: Scene, where: str, end: str, names: list, members: list, used: dict, supported: dict):
+    """``(piece, side)`` of a member end ``"<name>.start"`` or ``"<name>.end"``."""
+    name, _, side = end.rpartition(".")
+    if side not in ("start", "end") or not name:
+        raise SceneError(f"{where}: key 'ends': {end!r}: expected \"<member>.start\" or \"<member>.end\"")
+    if name not in names:
+        raise SceneError(f"{where}: key 'ends': {end!r}: no [[beams]] entry named {name!r} (members: "
+                         f"{', '.join(names)})")
+    if end in used:
+        raise SceneError(f"{where}: key 'ends': {end!r} is already joined (joints[{used[end]}]); "
+                         "list all the ends of one point in one joint")
+    bc = supported.get(end)
+    if bc is not None and scene[bc] != "free":
+        raise SceneError(f"{where}: key 'ends': {end!r} is supported ({bc} = {scene[bc]!r}); a joint takes free "
+                         "ends only: support the frame through a member end of its own")
+    m = names.index(name)
+    pieces = [k for k, mm in enumerate(members) if mm == m]
+    return (pieces[0], "start") if side == "start" else (pieces[-1], "end")
 
 
 def _space(scene: Scene, get, pre: str, curve: NurbsCurve) -> CollocationSpace:
@@ -565,10 +667,25 @@ def _point_rows(pb: BeamProblem, y0: BeamState, fractions) -> np.ndarray:
     """Rows of basis values ``(k, n)`` at the parameters where the reference centreline
     (the initial state's) reaches the given fractions of its length (by chord lengths on
     a grid of 64 n_ctrl intervals, then linear interpolation of the parameter)."""
-    u = np.linspace(0.0, 1.0, 64 * pb.n + 1)
-    x = pb.space.point_matrix(u) @ np.asarray(y0.c, dtype=float)
+    sp = pb.space
+    if not getattr(sp, "chain", True):  # members apart: chords within each member only
+        parts = [_chords(sp.patches[k].point_matrix, np.asarray(y0.c, float)[sp.offsets[k]:sp.offsets[k + 1]],
+                         64 * p.n_ctrl, sp._u_edges[k], sp._u_edges[k + 1]) for k, p in enumerate(sp.patches)]
+        s0 = np.cumsum([0.0] + [s[-1] for s, _ in parts])
+        s, u = np.concatenate([s + s0[k] for k, (s, _) in enumerate(parts)]), np.concatenate([u for _, u in parts])
+    else:
+        s, u = _chords(sp.point_matrix, np.asarray(y0.c, float), 64 * pb.n, 0.0, 1.0)
+    return sp.point_matrix(np.interp(np.asarray(fractions, float) * s[-1], s, u))
+
+
+def _chords(point_matrix, c: np.ndarray, intervals: int, u0: float, u1: float):
+    """Cumulative chord length ``(k,)`` of the centreline with control values ``c`` on a grid of
+    ``intervals`` over the local parameter, and the global parameters ``(k,)`` of the grid
+    (``[u0, u1]``)."""
+    ul = np.linspace(0.0, 1.0, intervals + 1)
+    x = point_matrix(ul) @ c
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
-    return pb.space.point_matrix(np.interp(np.asarray(fractions, float) * s[-1], s, u))
+    return s, u0 + (u1 - u0) * ul
 
 
 def point_columns(fractions) -> list[str]:
@@ -812,9 +929,9 @@ def refine(scene: Scene) -> tuple[dict | None, str]:
 
 def constrained(pb: BeamProblem) -> int:
     """Degrees of freedom held by the supports (3 per held position or rotation) and the
-    rigid joints (6 each)."""
+    joints (6 per rigid pair, 3 per ball pair)."""
     ends = sum(3 * (bool(e.fix_position) + bool(e.fix_rotation)) for e in pb.ends)
-    return ends + 6 * len(getattr(pb, "joints", ()))
+    return ends + sum(3 + 3 * bool(getattr(j, "rigid", True)) for j in getattr(pb, "joints", ()))
 
 
 KIND = register_kind(ProblemKind(

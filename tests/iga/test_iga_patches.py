@@ -50,3 +50,23 @@ def test_split_curve_reproduces_the_curve(u):
     assert np.allclose(right.evaluate(t, 0)[0], curve.evaluate(u + (1 - u) * t, 0)[0], atol=1e-13)
     with pytest.raises(ValueError, match="split parameter"):
         split_curve(curve, 1.0)
+
+
+def test_explicit_joints_any_ends():
+    """A T of three patches: explicit joints to one first end (rows of each pair, kinds),
+    the chain-contact check skipped, and one-line errors for ends that do not meet, an end
+    joined twice and an unknown kind."""
+    post = CollocationSpace(straight(1.0, (0, 0, 1), 3, 6))
+    left = CollocationSpace(straight(0.5, (-1, 0, 0), 3, 5, origin=(0, 0, 1)))
+    right = CollocationSpace(straight(0.5, (1, 0, 0), 3, 5, origin=(0, 0, 1)))
+    pairs = [((0, "end"), (1, "start")), ((0, "end"), (2, "start"))]
+    sp = PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "ball"])
+    assert not sp.chain and sp.joints == ((5, 6), (5, 11)) and sp.joint_kinds == ("rigid", "ball")
+    with pytest.raises(ValueError, match="joined ends must coincide"):  # the chain: left's end is not right's start
+        PatchedSpace([post, left, right])
+    with pytest.raises(ValueError, match=r"patch end \(1, 'end'\) at \[-0.5, 0.0, 1.0\] and \(2, 'end'\) .* must coincide"):
+        PatchedSpace([post, left, right], joints=[((1, "end"), (2, "end"))])
+    with pytest.raises(ValueError, match=r"joint 2: patch end \(1, 'start'\) is joined twice"):
+        PatchedSpace([post, left, right], joints=[pairs[0], ((2, "start"), (1, "start"))])
+    with pytest.raises(ValueError, match="kinds: one of rigid, ball per joint"):
+        PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "hinge"])

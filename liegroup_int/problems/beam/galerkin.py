@@ -30,6 +30,7 @@ gradient of the strain energy at the same quadrature, so the semi-discrete energ
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -60,6 +61,20 @@ class GalerkinBeamState:
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K}
+
+
+class _GJoint(NamedTuple):
+    """One joint pair: control rows ``a, b`` of the two patch ends, the point at ``a``,
+    ``Q = R0_a^T R0_b``, the point load (or None, acting on row ``a``), the point at ``b``,
+    rigid (else a ball joint)."""
+
+    a: int
+    b: int
+    point: int
+    Q: np.ndarray
+    load: object
+    point_b: int
+    rigid: bool
 
 
 @dataclass(frozen=True)
@@ -151,7 +166,7 @@ class GalerkinBeamProblem(BeamBase):
         self.joints = self._joints(space, loads)
         #: ``(row, point, EndLoad)`` of every loaded end and joint
         self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
-            (j[0], j[2], j[4]) for j in self.joints if j[4] is not None)
+            (j.a, j.point, j.load) for j in self.joints if j.load is not None)
         fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
         for e in self.ends:
             fixp[e.index] |= e.fix_position
@@ -202,41 +217,64 @@ class GalerkinBeamProblem(BeamBase):
         return sections
 
     def _joints(self, space, loads) -> tuple:
-        """``(a, b, point_a, Q, load)`` of each rigid joint: the control rows of the two
-        patch ends, the point at the end of patch ``a``, the relative reference rotation
-        ``Q = R0_a^T R0_b`` there and the point load (or None)."""
+        """:class:`_GJoint` of each joint pair: the control rows of the two patch ends, the
+        points there, the relative reference rotation ``Q = R0_a^T R0_b``, the point load
+        (or None) and whether it is rigid (a ball joint: positions only)."""
+        kinds = getattr(space, "joint_kinds", ())
+        points = self._end_points(space)
         out = []
         for k, (a, b), ld in self.joint_loads(space, loads):
-            pa, pb = self.gs.patch_ends[k][1], self.gs.patch_ends[k + 1][0]
-            out.append((a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld))
+            pa, pb = points[a], points[b]
+            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kinds[k] == "rigid"))
         return tuple(out)
 
+    def _end_points(self, space) -> dict:
+        """``{control row: point}`` of every patch end (the basis interpolates there)."""
+        offsets = getattr(space, "offsets", (0, self.n))
+        out = {}
+        for k, (first, last) in enumerate(self.gs.patch_ends):
+            out[offsets[k]], out[offsets[k + 1] - 1] = first, last
+        return out
+
     def _joint_residual(self, x: np.ndarray, rotational: bool) -> np.ndarray:
-        """``C x``: ``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint, ``(3 J,)``."""
-        return np.concatenate([x[b] - (Q.T @ x[a] if rotational else x[a]) for a, b, _, Q, _ in self.joints])
+        """``C x``: ``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint pair, ``(3 J,)``."""
+        return np.concatenate([x[j.b] - (j.Q.T @ x[j.a] if rotational else x[j.a]) for j in self.joints])
 
     def _constraint(self, solve, rotational: bool):
         """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field: the columns
-        ``Y = M^-1 C^T`` ``(3 J, n, 3)`` and the inverse of ``S = C M^-1 C^T``."""
+        ``Y = M^-1 C^T`` ``(3 J, n, 3)`` and the inverse of ``S = C M^-1 C^T``. A rotational
+        field constrains the rigid pairs only: the rows of a ball joint are zero in ``Y`` and
+        ``S^-1``, so their multipliers are exactly 0."""
         k = 3 * len(self.joints)
         Y = np.zeros((k, self.n, 3))
-        for j, (a, b, _, Q, _) in enumerate(self.joints):
+        for j, jt in enumerate(self.joints):
+            if rotational and not jt.rigid:
+                continue
             for e in range(3):
                 r = np.zeros((self.n, 3))
-                r[b, e] = 1.0
-                r[a] -= Q[:, e] if rotational else np.eye(3)[:, e]
+                r[jt.b, e] = 1.0
+                r[jt.a] -= jt.Q[:, e] if rotational else np.eye(3)[:, e]
                 Y[3 * j + e] = solve(r)
-        S = np.array([self._joint_residual(y, rotational) for y in Y]).T
-        return Y, np.linalg.inv(S)
+        live = np.repeat([jt.rigid or not rotational for jt in self.joints], 3)
+        Sinv = np.zeros((k, k))
+        if np.any(live):
+            S = np.array([self._joint_residual(y, rotational) for y in Y[live]]).T[live]
+            Sinv[np.ix_(live, live)] = np.linalg.inv(S)
+        return Y, Sinv
+
+    def _multipliers(self, x: np.ndarray, field: str) -> np.ndarray:
+        """The joints' multipliers ``S^-1 C x`` of the unconstrained solution ``x`` of one
+        field, ``(J, 3)`` (zero rows for the rotations of ball joints)."""
+        Y, Sinv = self._constraints[field]
+        return (Sinv @ self._joint_residual(x, field != "position")).reshape(-1, 3)
 
     def _constrain(self, x: np.ndarray, field: str) -> np.ndarray:
         """The solution ``x`` of ``M x = f`` corrected by the joints' multipliers:
-        ``x - Y S^-1 C x`` (rigid joints, no work)."""
+        ``x - Y S^-1 C x`` (the constraint forces do no work)."""
         if not self.joints:
             return x
-        Y, Sinv = self._constraints[field]
-        lam = Sinv @ self._joint_residual(x, field != "position")
-        return x - np.tensordot(lam, Y, axes=1)
+        lam = self._multipliers(x, field).ravel()
+        return x - np.tensordot(lam, self._constraints[field][0], axes=1)
 
     def _solve_rotation(self, T: np.ndarray, fixed) -> np.ndarray:
         """``W'`` from ``(J M) W' = T`` component by component, ``(n, 3)``."""
@@ -274,9 +312,7 @@ class GalerkinBeamProblem(BeamBase):
         w = np.zeros((self.n, 3))
         if np.any(omega):  # material Omega = R0^T omega, projected; exact at the patch ends
             w = gs.project(rot_T(gs.R0, np.broadcast_to(omega, (self.m, 3))))
-            ends = [(0, 0)] + [(j[0], j[2]) for j in self.joints] + [(j[1], gs.patch_ends[k + 1][0])
-                                                                      for k, j in enumerate(self.joints)]
-            for row, pt in ends + [(self.n - 1, self.m - 1)]:
+            for row, pt in self._end_points(self.space).items():
                 w[row] = gs.R0[pt].T @ omega
         R = np.array(gs.R0)
         for e in self.ends:
@@ -292,16 +328,17 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ RKMK contract
     def project_increment(self, u: np.ndarray) -> np.ndarray:
         """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
-        and velocity, ``Q^T u_a`` for Theta and W): the increments that keep the members
-        rigidly joined. The stage rates satisfy this already; a perturbation that breaks a
+        and velocity, ``Q^T u_a`` for Theta and W at a rigid joint): the increments that keep
+        the members joined. The stage rates satisfy this already; a perturbation that breaks a
         joint (a finite-difference Jacobian's) then moves nothing, so the spectrum gets
         exact zeros for those directions instead of noise."""
         if not self.joints:
             return u
         u = np.array(u, dtype=float, copy=True)
-        for a, b, _, Q, _ in self.joints:
-            u[[0, 2], b] = u[[0, 2], a]
-            u[[1, 3], b] = u[[1, 3], a] @ Q
+        for j in self.joints:
+            u[[0, 2], j.b] = u[[0, 2], j.a]
+            if j.rigid:
+                u[[1, 3], j.b] = u[[1, 3], j.a] @ j.Q
         return u
 
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
@@ -484,6 +521,19 @@ class GalerkinBeamProblem(BeamBase):
         if "angular_velocity" in want:
             out["angular_velocity"] = rot(y.R, Om)
         return {k: out[k] for k in names if k in out}
+
+    def joint_reactions(self, y, t: float = 0.0) -> tuple:
+        """Force and couple (spatial) that the first end of each joint pair exerts on the
+        second, ``((force, couple), ...)`` with ``(3,)`` each: minus the Lagrange multipliers
+        of the position and rotation constraints (``M x = f - C^T lambda``; the couple is
+        zero at a ball joint). Joint point loads act on the first end."""
+        if not self.joints:
+            return ()
+        F, T = self._forces(t, y, self.B0 @ y.w)
+        lam_f = self._multipliers(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")),
+                                  "position")
+        lam_c = self._multipliers(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
+        return tuple((-lam_f[k], -(y.R[j.point_b] @ lam_c[k])) for k, j in enumerate(self.joints))
 
     def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple (spatial) each support exerts on the beam: the residuals of the

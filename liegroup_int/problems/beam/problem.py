@@ -243,6 +243,9 @@ class BeamProblem(BeamBase):
     @staticmethod
     def _joints(space, loads) -> tuple:
         """The rigid joints of a :class:`~liegroup_int.iga.PatchedSpace` (none for one patch)."""
+        if not getattr(space, "chain", True):
+            raise ValueError("joints: the collocation formulations join patches in a chain only (each end to the "
+                             'next start, rigidly); use space.formulation = "galerkin" for other joints')
         return tuple(_Joint(a, b, C_STAR / space.patches[k].l_s_end, C_STAR / space.patches[k + 1].l_s_start, ld)
                      for k, (a, b), ld in BeamBase.joint_loads(space, loads))
 

@@ -84,17 +84,20 @@ class _Unknowns:
 
     def __init__(self, pb: GalerkinBeamProblem):
         self.pb, n = pb, pb.n
-        follower = np.arange(n)  # joint rows b follow rows a
-        for a, b, *_ in pb.joints:
-            follower[b] = a
+        follower = np.arange(n)  # joint rows b follow rows a: positions at every joint,
+        turns = np.arange(n)  # rotations at the rigid ones
+        for j in pb.joints:
+            follower[j.b] = j.a
+            if j.rigid:
+                turns[j.b] = j.a
         self.node_of = follower
-        free = [(~pb.fix_position) & (follower == np.arange(n)), (~pb.fix_rotation) & (follower == np.arange(n))]
+        free = [(~pb.fix_position) & (follower == np.arange(n)), (~pb.fix_rotation) & (turns == np.arange(n))]
         idx = [(f, i, d) for i in range(n) for f in (0, 1) if free[f][i] for d in range(3)]
         self.field, self.row, self.comp = (np.array(v, dtype=int) for v in zip(*idx)) if idx else (
             np.zeros(0, int),) * 3
         self.size = len(idx)
         #: ``(n, n)`` bool: residual node (row) depends on control node (column)
-        self.pattern = _node_pattern(pb.gs.B0, pb.gs.B1, follower)
+        self.pattern = _node_pattern(pb.gs.B0, pb.gs.B1, follower, turns)
         self.groups = _groups(self.pattern)
         self.length = float(pb.space.length)
 
@@ -108,9 +111,10 @@ class _Unknowns:
         """Free entries of the generalized forces ``F, T`` ``(n, 3)``, with each joint's
         second rows added to its first (virtual work of the joined increments)."""
         F, T = F.copy(), T.copy()
-        for a, b, _, Q, _ in self.pb.joints:
-            F[a] += F[b]
-            T[a] += Q @ T[b]
+        for j in self.pb.joints:
+            F[j.a] += F[j.b]
+            if j.rigid:
+                T[j.a] += j.Q @ T[j.b]
         return np.stack([F, T])[self.field, self.row, self.comp]
 
     def increment_norm(self, x: np.ndarray) -> float:
@@ -122,14 +126,18 @@ class _Unknowns:
         return float(np.sqrt(np.sum(np.where(self.field == 0, r, r / self.length) ** 2)))
 
 
-def _node_pattern(B0: np.ndarray, B1: np.ndarray, node_of: np.ndarray) -> np.ndarray:
+def _node_pattern(B0: np.ndarray, B1: np.ndarray, node_of: np.ndarray, turns_of=None) -> np.ndarray:
     """``(n, n)`` bool: residual node ``k`` depends on control node ``j`` (their basis
-    functions share a point), with joint rows merged onto their first rows."""
+    functions share a point), with joint rows merged onto their first rows (``node_of``
+    for positions, ``turns_of`` for rotations: a ball joint's second row is its own node
+    for the rotations and its first row's for the positions, so it belongs to both)."""
     A = ((B0 != 0) | (B1 != 0)).astype(float)
     P = (A.T @ A) > 0
     n = len(node_of)
     M = np.zeros((n, n))
     M[np.arange(n), node_of] = 1.0
+    if turns_of is not None:
+        M[np.arange(n), turns_of] = 1.0
     return (M.T @ P.astype(float) @ M) > 0
 
 

@@ -87,10 +87,10 @@ class GalerkinData(NamedTuple):
     point_force: np.ndarray
     point_couple: np.ndarray
     point_follower: np.ndarray
-    joint_ab: np.ndarray  # (J, 2) rows of each rigid joint, Q = R0_a^T R0_b (J, 3, 3)
+    joint_ab: np.ndarray  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
     joint_q: np.ndarray
     Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
-    Sinv: np.ndarray  # (3, 3 J, 3 J)
+    Sinv: np.ndarray  # (3, 3 J, 3 J); a ball joint's rows are 0 in Y[1:], Sinv[1:] (lam = 0)
     keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
     jr: np.ndarray  # (3 J,) work
     body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
@@ -218,7 +218,8 @@ def _prescribe(b, C, rows, vals, q):
 
 @njit(cache=True, fastmath=False, _nrt=False)
 def _constrain(x, jab, jq, Y, Sinv, rotational, r):
-    """``x <- x - Y S^-1 C x`` (rigid joints: ``x[b] = Q^T x[a]``, or ``x[b] = x[a]``)."""
+    """``x <- x - Y S^-1 C x`` (joints: ``x[b] = Q^T x[a]``, or ``x[b] = x[a]``; rows of
+    ``S^-1`` that are zero leave their constraint out)."""
     nj = jab.shape[0]
     for j in range(nj):
         a, b = jab[j, 0], jab[j, 1]
@@ -385,7 +386,8 @@ def _point_data(pb, loads: np.ndarray, table: LoadTable) -> dict:
 
 
 def _joint_data(pb) -> dict:
-    """The rigid joints' and the end bodies' fields of :class:`GalerkinData`."""
+    """The joints' and the end bodies' fields of :class:`GalerkinData` (a ball joint's
+    rotational rows are zero in ``Y`` and ``Sinv``)."""
     n, nj = pb.n, len(pb.joints)
     if nj:
         cons = [pb._constraints[k] for k in ("position", "theta", "rotation")]
