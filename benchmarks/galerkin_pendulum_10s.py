@@ -197,7 +197,9 @@ def print_table(runs, mets, ref, T):
         if r["kind"] == "ours":
             note = f"lam={r['lam']:.4e} 1/s; energy diagnostics {r['diag_s']:.2f} s CPU (not in CPU column)"
         else:
-            note = (f"dt = dt_max/2, dt_max={r['dt_max']:.3e} (next tried {r['dt_bad']:.3e} unstable) over "
+            tried = (f"next tried {r['dt_bad']:.3e} unstable" if np.isfinite(r["dt_bad"])
+                     else "the largest step of the ladder")
+            note = (f"dt = dt_max/2, dt_max={r['dt_max']:.3e} ({tried}) over "
                     f"{min(T, 1.0):g} s" + ("; " + "; ".join(r["notes"]) if r["notes"] else ""))
         if r["failed"]:
             note += f"; FAILED: {r['failed']}"
