@@ -121,12 +121,14 @@ def write_beam_vtu(path, points, frames=None, point_data=None, encoding: str = "
         Output file (conventionally ``*.vtu``); parent directories must exist.
     points : array_like, shape (m, 3)
         Centreline points, in order along the beam (``m >= 2``); consecutive points are
-        joined by ``m - 1`` line cells.
+        joined by line cells (``m - 1``, or fewer: see ``point_data["member"]``).
     frames : array_like, shape (m, 3, 3), optional
         Section frames at the points; written as point vectors ``d1, d2, d3`` (the
         columns ``R[:, :, 0]``, ``R[:, :, 1]``, ``R[:, :, 2]``).
     point_data : dict of str to array_like, optional
         Extra point arrays, each of shape ``(m,)`` (scalars) or ``(m, k)`` (k components).
+        An array ``"member"`` (the member of each point, a frame's patch) also keeps the
+        cells within members: consecutive points of two members are not joined.
     encoding : {"ascii", "base64"}
         ``"ascii"``: text with ``repr`` (round-trip) precision; ``"base64"``: VTK's
         inline binary format (little endian, UInt64 byte-count headers). Both are exact.
@@ -150,15 +152,18 @@ def write_beam_vtu(path, points, frames=None, point_data=None, encoding: str = "
     if R is not None:
         arrays.update({name: R[:, :, j] for j, name in enumerate(FRAME_NAMES)})
     arrays.update(_check_point_data(point_data, m, FRAME_NAMES if R is not None else ()))
-    connectivity = np.repeat(np.arange(m, dtype=np.int64), 2)[1:-1]
-    offsets = 2 * np.arange(1, m, dtype=np.int64)
-    types = np.full(m - 1, VTK_LINE, dtype=np.uint8)
+    first = np.arange(m - 1, dtype=np.int64)
+    if "member" in arrays:
+        first = first[arrays["member"][:-1] == arrays["member"][1:]]
+    connectivity = np.stack([first, first + 1], axis=1).ravel()
+    offsets = 2 * np.arange(1, first.size + 1, dtype=np.int64)
+    types = np.full(first.size, VTK_LINE, dtype=np.uint8)
     vectors = ' Vectors="d1"' if R is not None else ""
     body = [
         '<?xml version="1.0"?>\n',
         '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n',
         "<UnstructuredGrid>\n",
-        f'<Piece NumberOfPoints="{m}" NumberOfCells="{m - 1}">\n',
+        f'<Piece NumberOfPoints="{m}" NumberOfCells="{first.size}">\n',
         f"<PointData{vectors}>\n",
         *(_data_array(name, a, encoding) for name, a in arrays.items()),
         "</PointData>\n",

@@ -95,12 +95,14 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     ----------
     times : (m,) array
     shapes : (m, k, 3) array
-        Centreline points at each time.
+        Centreline points at each time (NaN points break the line, between the members of
+        a frame).
     """
     plt = _pyplot()
     idx = np.unique(np.linspace(0, len(times) - 1, min(n_shapes, len(times))).round().astype(int))
     pts = shapes[idx]
-    ext = np.ptp(shapes.reshape(-1, 3), axis=0)
+    flat = shapes.reshape(-1, 3)
+    ext = np.nanmax(flat, axis=0) - np.nanmin(flat, axis=0)
     a, b = sorted(np.argsort(ext)[-2:])
     fig = plt.figure(figsize=(11, 4.5))
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")

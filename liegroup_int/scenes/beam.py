@@ -755,6 +755,9 @@ class ShapeRecorder:
         ctrl = np.asarray(ctrl[...], dtype=float)
         u = np.linspace(0.0, 1.0, self.n_points)
         line = np.einsum("uj,mjk->muk", self.space.point_matrix(u), ctrl)
+        if not getattr(self.space, "chain", True):  # members apart: a NaN point between them
+            member = np.searchsorted(self.space._u_edges[1:-1], u, side="right")
+            line = np.insert(line, np.flatnonzero(np.diff(member)) + 1, np.nan, axis=1)
         return {"t": np.asarray(t), "control_points": ctrl, "u": u, "centreline": line}
 
 
@@ -861,9 +864,12 @@ def _frames(pb: BeamProblem, fields=()):
     requested section ``fields`` (``Simulation.frames``, the ParaView series)."""
     _, N0, s_c = pb.frame_points
     N0, s_c = np.asarray(N0), np.asarray(s_c, dtype=float)
+    base = {"s": s_c}
+    if not getattr(pb.space, "chain", True):  # a frame that is not a chain: no cell between members
+        base["member"] = np.asarray(pb.gs.point_patch, dtype=float)
     if fields:
-        return lambda y: (N0 @ y.c, y.R, {"s": s_c, **pb.section_fields(y, fields)})
-    return lambda y: (N0 @ y.c, y.R, {"s": s_c})
+        return lambda y: (N0 @ y.c, y.R, {**base, **pb.section_fields(y, fields)})
+    return lambda y: (N0 @ y.c, y.R, base)
 
 
 #: Largest number of unknowns (12 n_ctrl) for which the guards compute the dense spectrum

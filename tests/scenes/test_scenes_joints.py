@@ -251,3 +251,27 @@ def test_bad_joints_exit_2_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 2 and "joints[0]: key 'ends': 'arm.start'" in err
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_t_frame_pictures_do_not_join_members(tmp_path):
+    """The ParaView series and the shape plot draw each member on its own: the VTU has one
+    line cell per pair of consecutive points of the same member (points minus members, and
+    none across), with the member as point data; the plotted centrelines carry a NaN point
+    between members (no stroke from one arm's end to the next member's start)."""
+    import glob
+
+    import meshio
+
+    from liegroup_int.runner import run_scene
+
+    run_scene(load_scene("t_frame", {"t_end": 0.01, "output.every": 0.005, "output.paraview": True,
+                                     "output.plots": False}), tmp_path)
+    m = meshio.read(sorted(glob.glob(str(tmp_path / "paraview" / "*.vtu")))[-1])
+    member = m.point_data["member"]
+    cells = m.cells[0].data
+    assert len(cells) == len(member) - len(np.unique(member)) and np.all(member[cells[:, 0]] == member[cells[:, 1]])
+    from liegroup_int.scenes import KINDS
+
+    sim = KINDS["beam"].build(load_scene("t_frame"))
+    line = sim.snapshot.from_snapshots(np.array([0.0, 1.0]), {"c": np.stack([sim.y0.c, sim.y0.c])})["centreline"]
+    assert np.sum(np.isnan(line[0, :, 0])) == len(np.unique(member)) - 1
