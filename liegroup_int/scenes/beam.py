@@ -170,7 +170,7 @@ KEYS = {
 }
 
 QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error", "energy_balance",
-              "work", "reactions")
+              "work", "reactions", "joint_reactions")
 COLUMNS = {
     "tip": ["tip_x", "tip_y", "tip_z"],
     "momentum": ["p_x", "p_y", "p_z"],
@@ -660,6 +660,9 @@ def check(scene: Scene) -> None:
     if "reactions" in scene.output.quantities and not pb.supports():
         raise SceneError(f"{scene.source}: key 'output.quantities': 'reactions' needs a clamped or hinged end "
                          f"(bc.start = {scene['bc.start']!r}, bc.end = {scene['bc.end']!r})")
+    if "joint_reactions" in scene.output.quantities and not (pb.formulation == "galerkin" and pb.joints):
+        raise SceneError(f"{scene.source}: key 'output.quantities': 'joint_reactions' needs a frame's joints "
+                         "([[beams]] or [[joints]]) and space.formulation = \"galerkin\"")
     _checked = (scene, pb)
 
 
@@ -698,6 +701,12 @@ def reaction_columns(pb: BeamProblem) -> list[str]:
     return [f"reaction_{end}_{q}" for end in pb.supports() for q in ("fx", "fy", "fz", "cx", "cy", "cz")]
 
 
+def joint_columns(pb: BeamProblem) -> list[str]:
+    """``joint<k>_fx .. cz``: the force and couple (spatial) the first end of joint pair ``k``
+    exerts on the second (:meth:`GalerkinBeamProblem.joint_reactions`)."""
+    return [f"joint{k}_{q}" for k in range(len(getattr(pb, "joints", ()))) for q in ("fx", "fy", "fz", "cx", "cy", "cz")]
+
+
 def diagnostics(pb: BeamProblem, names, points=None) -> dict:
     """Quantities computed from the state; ``energy_balance`` and ``work`` need the run's
     work of the loads and are added by the runner (liegroup_int/guards.py). ``points``:
@@ -711,6 +720,7 @@ def diagnostics(pb: BeamProblem, names, points=None) -> dict:
         "angular_momentum": lambda t, y: pb.momentum(y)[1],
         "orth_error": lambda t, y: pb.orth_error(y),
         "reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.reactions(y, t).values()]),
+        "joint_reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.joint_reactions(y, t)]),
     }
     out = {q: table[q] for q in names if q in table}
     if points is not None:
@@ -836,6 +846,7 @@ def build(scene: Scene) -> Simulation:
            if scene["material.kelvin_voigt"] == "auto" and pb.formulation == "galerkin" else {}),
         "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
                     **({"reactions": reaction_columns(pb)} if "reactions" in scene.output.quantities else {}),
+                    **({"joint_reactions": joint_columns(pb)} if "joint_reactions" in scene.output.quantities else {}),
                     **({"points": point_columns(scene["output.points"])} if scene["output.points"] else {})},
     }
     fields = tuple(scene["output.fields"])

@@ -275,3 +275,31 @@ def test_t_frame_pictures_do_not_join_members(tmp_path):
     sim = KINDS["beam"].build(load_scene("t_frame"))
     line = sim.snapshot.from_snapshots(np.array([0.0, 1.0]), {"c": np.stack([sim.y0.c, sim.y0.c])})["centreline"]
     assert np.sum(np.isnan(line[0, :, 0])) == len(np.unique(member)) - 1
+
+
+def test_joint_reactions_are_recorded_per_joint(tmp_path):
+    """``output.quantities = [..., "joint_reactions"]``: six columns per joint pair in
+    history.csv, equal to the problem's joint_reactions at the recorded states (the final
+    row against the final state, to round-off); refused in one line without joints."""
+    from liegroup_int.io import read_history
+    from liegroup_int.runner import run_scene
+    from liegroup_int.scenes import KINDS
+
+    sc = load_scene("t_frame", {"t_end": 0.01, "output.every": 0.005, "output.plots": False,
+                                "output.quantities": ["tip", "joint_reactions"]})
+    res = run_scene(sc, tmp_path)
+    h = read_history(tmp_path / "history.csv")
+    from liegroup_int.io.checkpoint import read_checkpoint
+
+    sim = KINDS["beam"].build(sc)
+    pb = sim.problem
+    cols = [f"joint{k}_{q}" for k in range(len(pb.joints)) for q in ("fx", "fy", "fz", "cx", "cy", "cz")]
+    assert len(pb.joints) == 2 and all(c in h for c in cols) and res.summary["status"] == "ok"
+    ck = read_checkpoint(tmp_path / "checkpoint.npz")
+    assert ck["t"] == h["t"][-1]
+    want = np.concatenate([np.concatenate(fc) for fc in pb.joint_reactions(sim.from_arrays(ck["state"]), ck["t"])])
+    got = np.array([h[c][-1] for c in cols])
+    assert np.max(np.abs(got - want)) <= 1e-12 * np.max(np.abs(want)) + 1e-14
+    assert np.max(np.abs(want)) > 0.1  # the tip force passes through the joint
+    with pytest.raises(SceneError, match="'joint_reactions' needs a frame's joints"):
+        load_scene("cantilever", {"output.quantities": ["joint_reactions"]})
