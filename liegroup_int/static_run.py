@@ -5,6 +5,8 @@ Files in the output directory:
 * ``summary.json``: scene, discretization, load time, load factors, Newton iterations and
   relative residual norms per step, ``converged``, the tip position and, when a step did
   not converge, the one-line ``error`` (the rest describes the last converged step);
+* ``history.csv``: the load path, a row per converged load step (``step, load_factor,
+  iterations, residual, tip_x, tip_y, tip_z``);
 * ``shape.csv``: the centreline of the last converged state at 101 parameters
   (``u, x, y, z``);
 * ``static.vtu``: that state at the frame points with its section frames (ParaView);
@@ -93,6 +95,7 @@ def run_static(scene: Scene, out_dir: Path, steps: int = 10, tol: float = 1e-8, 
     printer.close()
     summary = _summary(scene, pb, res, t, steps, tol, max_iter, time.process_time() - clock, error)
     _write(out_dir, pb, res.state, summary)
+    _write_path(out_dir, res)
     if error is not None:
         raise StaticFailed(f"{scene.source}: {error}; the last converged state is in {out_dir}")
     return summary
@@ -107,8 +110,25 @@ def _summary(scene: Scene, pb, res, t, steps, tol, max_iter, cpu_s, error) -> di
         "converged": res.converged, "load_factors": res.load_factors, "iterations": res.iterations,
         "residuals": res.residuals, "load_norm": res.load_norm, "tangents": res.tangents,
         "residual_evaluations": res.evaluations, "cpu_time_s": cpu_s,
-        "tip": pb.tip(res.state).tolist(), **({"error": error} if error is not None else {}),
+        "tip": pb.tip(res.state).tolist(), **_reactions(pb, res.state, t),
+        **({"error": error} if error is not None else {}),
     }
+
+
+def _reactions(pb, y, t: float) -> dict:
+    """The supports' and joints' reactions at the state (spatial force and couple)."""
+    out = {"reactions": {name: {"force": f.tolist(), "couple": c.tolist()} for name, (f, c) in pb.reactions(y, t).items()}}
+    if getattr(pb, "joints", ()):
+        out["joint_reactions"] = [{"force": f.tolist(), "couple": c.tolist()} for f, c in pb.joint_reactions(y, t)]
+    return out
+
+
+def _write_path(out_dir: Path, res) -> None:
+    """``history.csv``: the converged load steps."""
+    rows = [[k + 1, lam, it, r[-1], *tip] for k, (lam, it, r, tip) in
+            enumerate(zip(res.load_factors, res.iterations, res.residuals, res.tips))]
+    np.savetxt(Path(out_dir) / "history.csv", np.array(rows, dtype=float).reshape(-1, 7), delimiter=",",
+               header="step,load_factor,iterations,residual,tip_x,tip_y,tip_z", comments="", fmt="%.17g")
 
 
 def _write(out_dir: Path, pb, y, summary: dict) -> None:

@@ -203,3 +203,20 @@ def test_static_start_refusals_are_one_line(over, match, tmp_path):
         run_scene(load_scene("cantilever", {"t_end": 1e-4, "output.every": 1e-4, "output.plots": False, **over}),
                   tmp_path / "r")
     assert "\n" not in str(exc.value) and "initial.state" in str(exc.value)
+
+
+def test_static_command_writes_the_load_path_and_balanced_reactions(tmp_path):
+    """``static cantilever``: history.csv holds one row per load step (load factors 0.1 ..
+    1, the tip falling monotonically), and the clamp's reaction balances the tip load: the
+    force to round-off (measured 4e-13 relative) and the couple against r_tip x F to the
+    Newton tolerance (1e-8 of the load; measured 8e-9), asserted 1e-7."""
+    out = tmp_path / "st"
+    assert main(["static", "cantilever", "--out", str(out), "--quiet"]) == 0
+    rows = np.loadtxt(out / "history.csv", delimiter=",", skiprows=1)
+    assert rows.shape == (10, 7) and np.allclose(rows[:, 1], np.arange(1, 11) / 10) and np.all(np.diff(rows[:, 6]) < 0)
+    s = json.loads((out / "summary.json").read_text())
+    force = np.array([0.0, 0.0, -100.0])
+    r = s["reactions"]["start"]
+    assert np.max(np.abs(np.array(r["force"]) + force)) < 1e-7 * 100.0
+    assert np.max(np.abs(np.array(r["couple"]) + np.cross(s["tip"], force))) < 1e-7 * 100.0
+    assert rows[-1, 4:] == pytest.approx(s["tip"], abs=1e-15)

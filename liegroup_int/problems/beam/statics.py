@@ -65,6 +65,8 @@ class StaticResult:
         relative residuals).
     tangents : int
         Tangents assembled; ``evaluations``: residual evaluations in all.
+    tips : list of ndarray
+        The tip position ``(3,)`` at each converged load step (the load path).
     """
 
     state: GalerkinBeamState
@@ -75,6 +77,7 @@ class StaticResult:
     load_norm: float = 0.0
     tangents: int = 0
     evaluations: int = 0
+    tips: list = field(default_factory=list)
 
 
 class _Unknowns:
@@ -315,6 +318,7 @@ def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: flo
         res.state = y
         res.load_factors.append(lam)
         res.iterations.append(len(hist) - 1)
+        res.tips.append(problem.tip(y))
     res.converged = True
     return res
 
