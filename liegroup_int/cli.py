@@ -43,6 +43,9 @@ def _add_run_commands(sub) -> None:
     stt.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key (repeatable)")
     stt.add_argument("--out", type=Path, default=None, help="output directory (default: runs/SCENE-static)")
+    stt.add_argument("--arc-length", type=float, default=None, metavar="DS",
+                     help="follow the equilibrium path by arc-length continuation with steps DS (norm of (eta / L, "
+                          "Theta, load factor)) through limit points, up to load factor 1 or --steps steps")
     stt.add_argument("--steps", type=int, default=10, help="load steps (load factors 1/N, 2/N, ..., 1; default 10)")
     stt.add_argument("--tol", type=float, default=1e-8,
                      help="residual norm relative to the load norm at which a step has converged (default 1e-8)")

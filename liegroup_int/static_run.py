@@ -6,7 +6,8 @@ Files in the output directory:
   relative residual norms per step, ``converged``, the tip position and, when a step did
   not converge, the one-line ``error`` (the rest describes the last converged step);
 * ``history.csv``: the load path, a row per converged load step (``step, load_factor,
-  iterations, residual, tip_x, tip_y, tip_z``);
+  iterations, residual, tip_x, tip_y, tip_z``; with ``--arc-length``: the path's points,
+  ``step, load_factor, iterations, tip_x, tip_y, tip_z``);
 * ``shape.csv``: the centreline of the last converged state at 101 parameters
   (``u, x, y, z``);
 * ``static.vtu``: that state at the frame points with its section frames (ParaView);
@@ -143,6 +144,42 @@ def _write(out_dir: Path, pb, y, summary: dict) -> None:
     write_json(out_dir / "summary.json", summary)
 
 
+def run_arc_length(scene: Scene, out_dir: Path, ds: float, steps: int, tol: float, max_iter: int,
+                   t: float | None = None) -> dict:
+    """``static --arc-length DS``: the equilibrium path by arc-length continuation
+    (:func:`~liegroup_int.problems.beam.arclength.arc_length_path`) until the load factor
+    passes 1 or ``steps`` steps; ``history.csv`` the path, the last point's state in the
+    other files; returns the summary (``limit_load_factor`` when the path passed a limit)."""
+    from .problems.beam.arclength import arc_length_path
+
+    pb = static_problem(scene)
+    t = scene.t_end if t is None else float(t)
+    clock = time.process_time()
+    try:
+        path = arc_length_path(pb, steps=steps, ds=ds, t=t, tol=tol, max_iter=max_iter, lam_max=1.0)
+    except ValueError as exc:
+        raise SceneError(f"{scene.source}: {exc}") from None
+    y = path.states[-1]
+    summary = {
+        "scene": scene.name, "source": scene.source, "version": __version__, "command": "static --arc-length",
+        "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
+                           "n_ctrl": scene["space.n_ctrl"], "length": pb.space.length},
+        "load_time": t, "arc_length_step": ds, "steps": len(path.iterations), "tol": tol,
+        "converged": path.converged, "load_factors": path.load_factors, "iterations": path.iterations,
+        "limit_load_factor": path.limit, "cpu_time_s": time.process_time() - clock,
+        "tip": pb.tip(y).tolist(), **_reactions(pb, y, t)}
+    _write(out_dir, pb, y, summary)
+    rows = [[k, lam, it, *tip] for k, (lam, it, tip) in
+            enumerate(zip(path.load_factors, [0] + path.iterations, path.tips))]
+    np.savetxt(Path(out_dir) / "history.csv", np.array(rows, dtype=float), delimiter=",",
+               header="step,load_factor,iterations,tip_x,tip_y,tip_z", comments="", fmt="%.17g")
+    if not path.converged:
+        raise StaticFailed(f"{scene.source}: arc length: the corrector did not converge after load factor "
+                           f"{path.load_factors[-1]:.6g} (step {len(path.iterations) + 1}); try a smaller --arc-length; "
+                           f"the path so far is in {out_dir}")
+    return summary
+
+
 def main_static(args) -> int:
     """The ``static`` command (:mod:`liegroup_int.cli`): exit 0, 2 (bad input) or 3 (a load
     step did not converge)."""
@@ -157,7 +194,16 @@ def main_static(args) -> int:
     overrides = {**dict(parse_override(s) for s in args.overrides), "integrator.backend": "numpy"}
     scene = load_scene(args.scene, overrides)
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-static"
+    if args.arc_length is not None and not args.arc_length > 0:
+        raise SceneError(f"static: --arc-length {args.arc_length}: expected a positive step")
     try:
+        if args.arc_length is not None:
+            s = run_arc_length(scene, out, args.arc_length, args.steps, args.tol, args.max_iter, args.time)
+            limit = s["limit_load_factor"]
+            print(f"{scene.name}: arc-length path of {s['steps']} steps to load factor {s['load_factors'][-1]:.6g}; "
+                  + (f"limit load factor {limit:.6g}" if limit is not None else "no limit point on the way")
+                  + f"; {s['cpu_time_s']:.3g} s CPU -> {out}")
+            return 0
         s = run_static(scene, out, steps=args.steps, tol=args.tol, max_iter=args.max_iter, t=args.time,
                        quiet=args.quiet)
     except StaticFailed as exc:
