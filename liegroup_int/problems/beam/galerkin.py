@@ -38,7 +38,7 @@ from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
 from .base import SECTION_FIELDS, BeamBase
-from .kinematics import jr_times, rot, rot_T
+from .kinematics import jr_times, perpendicular_rows, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
 
 #: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
@@ -66,7 +66,10 @@ class GalerkinBeamState:
 class _GJoint(NamedTuple):
     """One joint pair: control rows ``a, b`` of the two patch ends, the point at ``a``,
     ``Q = R0_a^T R0_b``, the point load (or None, acting on row ``a``), the point at ``b``,
-    rigid (else a ball joint)."""
+    rigid (else a ball joint or a hinge), and ``D`` ``(3, 3)``: the rows of the constrained
+    directions of the rotational residual ``x[b] - Q^T x[a]`` (material components at
+    ``b``): the identity (rigid), zero (ball), or two unit rows perpendicular to the hinge
+    axis ``R0_b^T axis`` and a zero row (hinge)."""
 
     a: int
     b: int
@@ -75,6 +78,7 @@ class _GJoint(NamedTuple):
     load: object
     point_b: int
     rigid: bool
+    D: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -219,13 +223,18 @@ class GalerkinBeamProblem(BeamBase):
     def _joints(self, space, loads) -> tuple:
         """:class:`_GJoint` of each joint pair: the control rows of the two patch ends, the
         points there, the relative reference rotation ``Q = R0_a^T R0_b``, the point load
-        (or None) and whether it is rigid (a ball joint: positions only)."""
+        (or None), whether it is rigid and its constrained rotational directions ``D``."""
         kinds = getattr(space, "joint_kinds", ())
+        axes = getattr(space, "joint_axes", (None,) * len(kinds))
         points = self._end_points(space)
         out = []
         for k, (a, b), ld in self.joint_loads(space, loads):
             pa, pb = points[a], points[b]
-            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kinds[k] == "rigid"))
+            kind = kinds[k] if kinds else "rigid"
+            D = np.eye(3) if kind == "rigid" else np.zeros((3, 3))
+            if kind == "hinge":
+                D[:2] = perpendicular_rows(self.gs.R0[pb].T @ axes[k])
+            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D))
         return tuple(out)
 
     def _end_points(self, space) -> dict:
@@ -237,34 +246,49 @@ class GalerkinBeamProblem(BeamBase):
         return out
 
     def _joint_residual(self, x: np.ndarray, rotational: bool) -> np.ndarray:
-        """``C x``: ``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint pair, ``(3 J,)``."""
+        """``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint pair, ``(3 J,)``:
+        ``C x`` for the rigid pairs; the constraints are its components along the rows of
+        each pair's ``D`` (positions: all three)."""
         return np.concatenate([x[j.b] - (j.Q.T @ x[j.a] if rotational else x[j.a]) for j in self.joints])
 
+    def _directions(self, rotational: bool) -> np.ndarray:
+        """Block diagonal ``(3 J, 3 J)`` of the pairs' constrained directions ``D`` (the
+        identity for positions)."""
+        D = np.zeros((3 * len(self.joints),) * 2)
+        for j, jt in enumerate(self.joints):
+            D[3 * j:3 * j + 3, 3 * j:3 * j + 3] = jt.D if rotational else np.eye(3)
+        return D
+
     def _constraint(self, solve, rotational: bool):
-        """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field: the columns
-        ``Y = M^-1 C^T`` ``(3 J, n, 3)`` and the inverse of ``S = C M^-1 C^T``. A rotational
-        field constrains the rigid pairs only: the rows of a ball joint are zero in ``Y`` and
-        ``S^-1``, so their multipliers are exactly 0."""
+        """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field, ``C x = D r``
+        with ``r`` the residual :meth:`_joint_residual`: the columns ``Y = M^-1 C^T``
+        ``(3 J, n, 3)`` and ``S^-1 D`` ``(3 J, 3 J)`` with ``S = C M^-1 C^T`` on the
+        constrained directions (so ``S^-1 D r`` are the multipliers). The zero rows of ``D``
+        (all three of a ball joint, the axial one of a hinge) are zero in ``Y`` and
+        ``S^-1 D``: their multipliers are exactly 0."""
         k = 3 * len(self.joints)
+        D = self._directions(rotational)
         Y = np.zeros((k, self.n, 3))
         for j, jt in enumerate(self.joints):
-            if rotational and not jt.rigid:
-                continue
             for e in range(3):
+                d = D[3 * j + e, 3 * j:3 * j + 3]
+                if not np.any(d):
+                    continue
                 r = np.zeros((self.n, 3))
-                r[jt.b, e] = 1.0
-                r[jt.a] -= jt.Q[:, e] if rotational else np.eye(3)[:, e]
+                r[jt.b] = d
+                r[jt.a] -= jt.Q @ d if rotational else d
                 Y[3 * j + e] = solve(r)
-        live = np.repeat([jt.rigid or not rotational for jt in self.joints], 3)
+        live = np.any(D != 0.0, axis=1)
         Sinv = np.zeros((k, k))
         if np.any(live):
-            S = np.array([self._joint_residual(y, rotational) for y in Y[live]]).T[live]
-            Sinv[np.ix_(live, live)] = np.linalg.inv(S)
+            S = (D @ np.array([self._joint_residual(y, rotational) for y in Y[live]]).T)[live]
+            Sinv[live] = np.linalg.solve(S, D[live])
         return Y, Sinv
 
     def _multipliers(self, x: np.ndarray, field: str) -> np.ndarray:
         """The joints' multipliers ``S^-1 C x`` of the unconstrained solution ``x`` of one
-        field, ``(J, 3)`` (zero rows for the rotations of ball joints)."""
+        field, ``(J, 3)``, along the rows of each pair's ``D`` (zero for the free
+        directions)."""
         Y, Sinv = self._constraints[field]
         return (Sinv @ self._joint_residual(x, field != "position")).reshape(-1, 3)
 
@@ -328,8 +352,9 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ RKMK contract
     def project_increment(self, u: np.ndarray) -> np.ndarray:
         """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
-        and velocity, ``Q^T u_a`` for Theta and W at a rigid joint): the increments that keep
-        the members joined. The stage rates satisfy this already; a perturbation that breaks a
+        and velocity; for Theta and W the components along ``D`` of ``u_b - Q^T u_a`` set to
+        zero: ``Q^T u_a`` at a rigid joint, the perpendicular part at a hinge): the increments
+        that keep the members joined. The stage rates satisfy this already; a perturbation that breaks a
         joint (a finite-difference Jacobian's) then moves nothing, so the spectrum gets
         exact zeros for those directions instead of noise."""
         if not self.joints:
@@ -337,8 +362,9 @@ class GalerkinBeamProblem(BeamBase):
         u = np.array(u, dtype=float, copy=True)
         for j in self.joints:
             u[[0, 2], j.b] = u[[0, 2], j.a]
-            if j.rigid:
-                u[[1, 3], j.b] = u[[1, 3], j.a] @ j.Q
+            if np.any(j.D):
+                P = j.D.T @ j.D  # projector on the constrained directions
+                u[[1, 3], j.b] -= (u[[1, 3], j.b] - u[[1, 3], j.a] @ j.Q) @ P
         return u
 
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
@@ -526,14 +552,15 @@ class GalerkinBeamProblem(BeamBase):
         """Force and couple (spatial) that the first end of each joint pair exerts on the
         second, ``((force, couple), ...)`` with ``(3,)`` each: minus the Lagrange multipliers
         of the position and rotation constraints (``M x = f - C^T lambda``; the couple is
-        zero at a ball joint). Joint point loads act on the first end."""
+        zero at a ball joint, perpendicular to the axis at a hinge). Joint point loads act on
+        the first end."""
         if not self.joints:
             return ()
         F, T = self._forces(t, y, self.B0 @ y.w)
         lam_f = self._multipliers(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")),
                                   "position")
         lam_c = self._multipliers(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
-        return tuple((-lam_f[k], -(y.R[j.point_b] @ lam_c[k])) for k, j in enumerate(self.joints))
+        return tuple((-lam_f[k], -(y.R[j.point_b] @ (j.D.T @ lam_c[k]))) for k, j in enumerate(self.joints))
 
     def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple (spatial) each support exerts on the beam: the residuals of the

@@ -90,7 +90,7 @@ class GalerkinData(NamedTuple):
     joint_ab: np.ndarray  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
     joint_q: np.ndarray
     Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
-    Sinv: np.ndarray  # (3, 3 J, 3 J); a ball joint's rows are 0 in Y[1:], Sinv[1:] (lam = 0)
+    Sinv: np.ndarray  # (3, 3 J, 3 J) S^-1 D: the free directions (ball, hinge axis) are 0 in Y, Sinv (lam = 0)
     keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
     jr: np.ndarray  # (3 J,) work
     body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
