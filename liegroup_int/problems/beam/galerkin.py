@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3, left_jacobian
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
 from .base import SECTION_FIELDS, BeamBase
@@ -66,10 +66,10 @@ class GalerkinBeamState:
 class _GJoint(NamedTuple):
     """One joint pair: control rows ``a, b`` of the two patch ends, the point at ``a``,
     ``Q = R0_a^T R0_b``, the point load (or None, acting on row ``a``), the point at ``b``,
-    rigid (else a ball joint or a hinge), and ``D`` ``(3, 3)``: the rows of the constrained
-    directions of the rotational residual ``x[b] - Q^T x[a]`` (material components at
-    ``b``): the identity (rigid), zero (ball), or two unit rows perpendicular to the hinge
-    axis ``R0_b^T axis`` and a zero row (hinge)."""
+    rigid (else a ball joint or a hinge), ``D`` ``(3, 3)``: the rows of the constant
+    constrained directions of the rotational residual ``x[b] - Q^T x[a]`` (material
+    components at ``b``): the identity (rigid) or zero (ball; hinge, whose constraints
+    depend on the state: :class:`_GHinge`), and the kind."""
 
     a: int
     b: int
@@ -79,6 +79,28 @@ class _GJoint(NamedTuple):
     point_b: int
     rigid: bool
     D: np.ndarray
+    kind: str = "rigid"
+
+
+class _GHinge(NamedTuple):
+    """One hinge pair: the index of its :class:`_GJoint`, its control rows and points,
+    ``E`` ``(2, 3)``: two orthonormal rows perpendicular to the material axis at ``b``
+    (``R0_b^T axis``), and per rotational field (``"theta"``, ``"rotation"``) the responses
+    ``Z`` ``(2, 3, n, 3)`` of the mass matrix constrained by the constant joints,
+    ``M_c^-1 (e_row e_c^T)``, for the rows ``a`` then ``b`` and the components ``c``.
+
+    Its constraints keep the deformed axes of both ends equal, ``R_a R0_a^T axis = R_b
+    R0_b^T axis``: on the material angular velocities ``E (W_b - G^T W_a) = 0`` and on the
+    rotation rates ``E (A_b Theta'_b - G^T A_a Theta'_a) = 0`` with ``G = R_a^T R_b`` and
+    ``A = dexp_{-Theta}`` at the ends (:meth:`GalerkinBeamProblem._hinge_rows`)."""
+
+    joint: int
+    a: int
+    b: int
+    point: int
+    point_b: int
+    E: np.ndarray
+    Z: dict
 
 
 @dataclass(frozen=True)
@@ -190,6 +212,7 @@ class GalerkinBeamProblem(BeamBase):
             "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
             "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True),
         } if self.joints else {}
+        self.hinges = self._hinges(space)
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
                                    or self.translating_ends or self.point_loads)
@@ -232,10 +255,65 @@ class GalerkinBeamProblem(BeamBase):
             pa, pb = points[a], points[b]
             kind = kinds[k] if kinds else "rigid"
             D = np.eye(3) if kind == "rigid" else np.zeros((3, 3))
-            if kind == "hinge":
-                D[:2] = perpendicular_rows(self.gs.R0[pb].T @ axes[k])
-            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D))
+            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D, kind))
         return tuple(out)
+
+    def _hinges(self, space) -> tuple:
+        """:class:`_GHinge` of each hinge pair (after the constant constraints)."""
+        axes = getattr(space, "joint_axes", ())
+        out = []
+        for k, j in enumerate(self.joints):
+            if j.kind != "hinge":
+                continue
+            E = perpendicular_rows(self.gs.R0[j.point_b].T @ axes[k])
+            Z = {}
+            for field, solve in (("theta", self.mass_theta.solve), ("rotation", lambda r: self._solve_rotation(r, 0.0))):
+                Z[field] = np.zeros((2, 3, self.n, 3))
+                for e, row in enumerate((j.a, j.b)):
+                    for c in range(3):
+                        r = np.zeros((self.n, 3))
+                        r[row, c] = 1.0
+                        Z[field][e, c] = self._constrain(solve(r), field)
+            out.append(_GHinge(k, j.a, j.b, j.point, j.point_b, E, Z))
+        return tuple(out)
+
+    def _hinge_rows(self, y, u: np.ndarray, field: str) -> tuple:
+        """Per hinge the constraint rows on row ``a`` and row ``b`` and the right-hand side,
+        ``(Ca, Cb, g)`` with ``(2, 3), (2, 3), (2,)``: ``W`` (``"rotation"``): ``Cb = E``,
+        ``Ca = -E G^T``, ``g = -E (W_b x G^T W_a)`` (the time derivative of ``G^T``
+        acting on ``W_a``); ``Theta'`` (``"theta"``): ``Cb = E A_b``, ``Ca = -E G^T A_a``,
+        ``g = 0``."""
+        out = []
+        for h in self.hinges:
+            G = y.R[h.point].T @ y.R[h.point_b]
+            if field == "rotation":
+                g = -h.E @ np.cross(y.w[h.b], G.T @ y.w[h.a])
+                out.append((-h.E @ G.T, h.E, g))
+            else:
+                Aa, Ab = left_jacobian(-u[1][h.a]), left_jacobian(-u[1][h.b])
+                out.append((-h.E @ G.T @ Aa, h.E @ Ab, np.zeros(2)))
+        return tuple(out)
+
+    def _hinge_multipliers(self, x: np.ndarray, y, u: np.ndarray, field: str):
+        """``(lambda, Y)``: the hinges' multipliers ``(H, 2)`` for the solution ``x`` of one
+        rotational field (constant joints applied) and their columns ``Y`` ``(2 H, n, 3)``."""
+        rows = self._hinge_rows(y, u, field)
+        Ys = [np.tensordot(Ca[k], h.Z[field][0], 1) + np.tensordot(Cb[k], h.Z[field][1], 1)
+              for h, (Ca, Cb, _) in zip(self.hinges, rows) for k in range(2)]
+
+        def C(v):
+            return np.concatenate([Ca @ v[h.a] + Cb @ v[h.b] for h, (Ca, Cb, _) in zip(self.hinges, rows)])
+
+        S = np.array([C(Yl) for Yl in Ys]).T
+        g = np.concatenate([r[2] for r in rows])
+        return np.linalg.solve(S, C(x) - g).reshape(-1, 2), np.array(Ys)
+
+    def _constrain_hinges(self, x: np.ndarray, y, u: np.ndarray, field: str) -> np.ndarray:
+        """``x - Y S^-1 (C x - g)``: the hinges' constraints on one rotational field."""
+        if not self.hinges:
+            return x
+        lam, Y = self._hinge_multipliers(x, y, u, field)
+        return x - np.tensordot(lam.ravel(), Y, axes=1)
 
     def _end_points(self, space) -> dict:
         """``{control row: point}`` of every patch end (the basis interpolates there)."""
@@ -394,10 +472,12 @@ class GalerkinBeamProblem(BeamBase):
         out[0] = y.v
         Om = self.B0 @ y.w
         # Theta' = dexpinv_{-Theta}(Omega), projected; at a clamp Theta' = W (parallel)
-        out[1] = self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w)
+        out[1] = self._constrain_hinges(self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w), y, u, "theta")
         F, T = self._forces(t, y, Om)
         out[2] = self._constrain(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")), "position")
-        out[3] = self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
+        out[3] = self._constrain_hinges(
+            self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation"), y, u,
+            "rotation")
         return out
 
     def _prescribed_acceleration(self, t: float, which: str) -> np.ndarray:
@@ -559,8 +639,18 @@ class GalerkinBeamProblem(BeamBase):
         F, T = self._forces(t, y, self.B0 @ y.w)
         lam_f = self._multipliers(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")),
                                   "position")
-        lam_c = self._multipliers(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
-        return tuple((-lam_f[k], -(y.R[j.point_b] @ (j.D.T @ lam_c[k]))) for k, j in enumerate(self.joints))
+        x = self._solve_rotation(T, self._prescribed_acceleration(t, "rotation"))
+        couples = [j.D.T @ lam for j, lam in zip(self.joints, self._multipliers(x, "rotation"))]
+        if self.hinges:
+            lam_h, _ = self._hinge_multipliers(self._constrain(x, "rotation"), y, np.zeros((4, self.n, 3)), "rotation")
+            r = np.zeros((self.n, 3))  # C_h^T lambda_h: the constant joints' share of it comes off theirs
+            for h, (Ca, Cb, _), lam in zip(self.hinges, self._hinge_rows(y, None, "rotation"), lam_h):
+                r[h.a] += Ca.T @ lam
+                r[h.b] += Cb.T @ lam
+                couples[h.joint] = h.E.T @ lam
+            share = self._multipliers(self._solve_rotation(r, 0.0), "rotation")
+            couples = [c - j.D.T @ d for c, j, d in zip(couples, self.joints, share)]
+        return tuple((-lam_f[k], -(y.R[j.point_b] @ couples[k])) for k, j in enumerate(self.joints))
 
     def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple (spatial) each support exerts on the beam: the residuals of the
