@@ -68,6 +68,17 @@ def _hinge_axes(kinds, axes) -> tuple:
     return tuple(out)
 
 
+def _springs(n: int, springs) -> tuple:
+    """``(stiffness, damping)`` of each pair, checked finite and ``>= 0``."""
+    out = tuple((float(k), float(c)) for k, c in springs) if springs is not None else ((0.0, 0.0),) * n
+    if len(out) != n:
+        raise ValueError(f"springs: one (stiffness, damping) per joint ({n}), got {len(out)}")
+    for i, kc in enumerate(out):
+        if not all(np.isfinite(v) and v >= 0.0 for v in kc):
+            raise ValueError(f"joint {i + 1}: spring stiffness and damping must be finite and >= 0, got {list(kc)}")
+    return out
+
+
 def split_curve(curve: NurbsCurve, u: float) -> tuple[NurbsCurve, NurbsCurve]:
     """The two pieces of a curve at parameter ``u`` in ``(0, 1)``, each parametrized over ``[0, 1]``.
 
@@ -110,6 +121,9 @@ class PatchedSpace:
     axes : sequence of (array_like (3,) or None), optional
         Hinge axis of each pair (spatial, reference configuration; non-zero for a
         ``"hinge"`` pair, ignored for the others).
+    springs : sequence of (float, float), optional
+        Rotational spring stiffness [N m/rad] and damper [N m s/rad] about the axis of each
+        pair (``>= 0``; used at hinges only, default 0).
 
     Attributes
     ----------
@@ -121,7 +135,8 @@ class PatchedSpace:
         the first of patch ``k + 1``).
     joint_ends : tuple of ((int, str), (int, str))
         The patch ends of each pair; ``joint_kinds``: their kinds (tuple of str);
-        ``joint_axes``: the unit hinge axis of each pair, ``(3,)`` (None but at hinges).
+        ``joint_axes``: the unit hinge axis of each pair, ``(3,)`` (None but at hinges);
+        ``joint_springs``: ``(stiffness, damping)`` of each pair.
     chain : bool
         The patches form the implied chain (no explicit ``joints``).
     n_ctrl, degree : int
@@ -139,7 +154,7 @@ class PatchedSpace:
     bandwidths : tuple of int
     """
 
-    def __init__(self, spaces, joints=None, kinds=None, axes=None) -> None:
+    def __init__(self, spaces, joints=None, kinds=None, axes=None, springs=None) -> None:
         spaces = tuple(spaces)
         if len(spaces) < 1 or not all(isinstance(s, CollocationSpace) for s in spaces):
             raise ValueError("PatchedSpace needs one or more CollocationSpace patches")
@@ -160,6 +175,7 @@ class PatchedSpace:
                              f"got {list(kinds)}")
         self.joint_kinds = kinds
         self.joint_axes = _hinge_axes(kinds, axes)
+        self.joint_springs = _springs(len(kinds), springs)
         self.joints = tuple((self.end_row(*a), self.end_row(*b)) for a, b in self.joint_ends)
         self._check_joints()
         self._u_edges = np.concatenate([[0.0], np.cumsum(lengths) / self.length])

@@ -134,7 +134,9 @@ def test_backends_agree_on_the_hinge_rates():
     ({"kind": "hinge"}, r"joints\[0\]: key 'axis' = \[0.0, 0.0, 0.0\]: a hinge needs a finite non-zero axis"),
     ({"kind": "hinge", "axis": [0, 0, 0]}, r"joints\[0\]: key 'axis' = \[0.0, 0.0, 0.0\]: a hinge needs"),
     ({"kind": "hinge", "axis": [0, 1]}, r"joints\[0\]: key 'axis'"),
-    ({"kind": "ball", "axis": [0, 0, 1]}, r"joints\[0\]: key 'axis': only a hinge has an axis \(kind = 'ball'\)"),
+    ({"kind": "ball", "axis": [0, 0, 1]}, r"joints\[0\]: key 'axis': only a hinge has an axis, a spring and a damper \(kind = 'ball'\)"),
+    ({"stiffness": 2.0}, r"joints\[0\]: key 'stiffness': only a hinge has an axis, a spring and a damper"),
+    ({"kind": "hinge", "axis": [0, 0, 1], "damping": -1.0}, r"joints\[0\]: key 'damping'"),
 ])
 def test_bad_hinge_axes_are_one_line_errors(joint, match):
     with pytest.raises(SceneError, match=match):

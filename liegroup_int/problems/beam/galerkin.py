@@ -92,7 +92,9 @@ class _GHinge(NamedTuple):
     Its constraints keep the deformed axes of both ends equal, ``R_a R0_a^T axis = R_b
     R0_b^T axis``: on the material angular velocities ``E (W_b - G^T W_a) = 0`` and on the
     rotation rates ``E (A_b Theta'_b - G^T A_a Theta'_a) = 0`` with ``G = R_a^T R_b`` and
-    ``A = dexp_{-Theta}`` at the ends (:meth:`GalerkinBeamProblem._hinge_rows`)."""
+    ``A = dexp_{-Theta}`` at the ends (:meth:`GalerkinBeamProblem._hinge_rows`). ``axis``:
+    the unit material axis at ``b`` ``(3,)`` (``E[0], E[1], axis`` right-handed), ``Q`` as
+    the joint's, ``stiffness`` and ``damping`` of its rotational spring-damper."""
 
     joint: int
     a: int
@@ -101,6 +103,10 @@ class _GHinge(NamedTuple):
     point_b: int
     E: np.ndarray
     Z: dict
+    axis: np.ndarray
+    Q: np.ndarray
+    stiffness: float
+    damping: float
 
 
 @dataclass(frozen=True)
@@ -215,7 +221,8 @@ class GalerkinBeamProblem(BeamBase):
         self.hinges = self._hinges(space)
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
-                                   or self.translating_ends or self.point_loads)
+                                   or self.translating_ends or self.point_loads
+                                   or any(h.damping > 0.0 for h in self.hinges))
 
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
         """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
@@ -260,12 +267,13 @@ class GalerkinBeamProblem(BeamBase):
 
     def _hinges(self, space) -> tuple:
         """:class:`_GHinge` of each hinge pair (after the constant constraints)."""
-        axes = getattr(space, "joint_axes", ())
+        axes, springs = getattr(space, "joint_axes", ()), getattr(space, "joint_springs", ())
         out = []
         for k, j in enumerate(self.joints):
             if j.kind != "hinge":
                 continue
-            E = perpendicular_rows(self.gs.R0[j.point_b].T @ axes[k])
+            axis = self.gs.R0[j.point_b].T @ axes[k]
+            E = perpendicular_rows(axis)
             Z = {}
             for field, solve in (("theta", self.mass_theta.solve), ("rotation", lambda r: self._solve_rotation(r, 0.0))):
                 Z[field] = np.zeros((2, 3, self.n, 3))
@@ -274,8 +282,24 @@ class GalerkinBeamProblem(BeamBase):
                         r = np.zeros((self.n, 3))
                         r[row, c] = 1.0
                         Z[field][e, c] = self._constrain(solve(r), field)
-            out.append(_GHinge(k, j.a, j.b, j.point, j.point_b, E, Z))
+            out.append(_GHinge(k, j.a, j.b, j.point, j.point_b, E, Z, axis / np.linalg.norm(axis), j.Q, *springs[k]))
         return tuple(out)
+
+    def _hinge_springs(self, y) -> list:
+        """``(phi, dphi/dt, k phi + c dphi/dt)`` of each hinge: the relative rotation angle
+        about the axis, ``H = Q^T R_a^T R_b = exp(phi hat(axis))`` read as ``phi =
+        atan2(E_1 . H E_0, E_0 . H E_0)`` in ``(-pi, pi]``, its rate ``axis . (W_b - G^T W_a)``
+        and the spring-damper couple. Its generalized forces are ``-m axis`` on row ``b`` and
+        ``m G axis`` on row ``a`` (material), the gradient of ``1/2 k phi^2`` for the elastic
+        part: ``dphi = axis . (dTheta_b - G^T dTheta_a)``."""
+        out = []
+        for h in self.hinges:
+            G = y.R[h.point].T @ y.R[h.point_b]
+            He = h.Q.T @ G @ h.E[0]
+            phi = float(np.arctan2(h.E[1] @ He, h.E[0] @ He))
+            rate = float(h.axis @ (y.w[h.b] - G.T @ y.w[h.a]))
+            out.append((phi, rate, h.stiffness * phi + h.damping * rate))
+        return out
 
     def _hinge_rows(self, y, u: np.ndarray, field: str) -> tuple:
         """Per hinge the constraint rows on row ``a`` and row ``b`` and the right-hand side,
@@ -527,6 +551,9 @@ class GalerkinBeamProblem(BeamBase):
             F += f * self.load_vector
         for row, _, body in self.bodies:
             T[row] -= np.cross(y.w[row], np.multiply(body.inertia, y.w[row]))
+        for h, (_, _, m) in zip(self.hinges, self._hinge_springs(y)):
+            T[h.b] -= m * h.axis
+            T[h.a] += m * (y.R[h.point].T @ (y.R[h.point_b] @ h.axis))
         for row, point, ld in self.point_loads:
             Re = R[point]
             if np.any(ld.force):
@@ -563,6 +590,8 @@ class GalerkinBeamProblem(BeamBase):
             Gt = rot_T(y.R, self.B1 @ y.c)
             gd, kd = self._strain_rates(y, Gt, Om)
             p -= self.tau * float(self.wa @ np.sum(self.CN * gd**2, axis=1) + self.wf @ np.sum(self.CM * kd**2, axis=1))
+        for h, (_, rate, _) in zip(self.hinges, self._hinge_springs(y)):
+            p -= h.damping * rate**2
         if self.has_q or self.has_m:
             f = self.loads.distributed_profile(t)
             if self.has_q:
@@ -590,7 +619,8 @@ class GalerkinBeamProblem(BeamBase):
                      + sum(float(y.w[:, d] @ (self._M_J[d] @ y.w[:, d])) for d in range(3)))
         Gt, N, Mm = self._resultants_elastic(y)
         strain = 0.5 * (float(self.wa @ np.sum(N * (Gt - self.gs.gamma0), axis=1))
-                        + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1)))
+                        + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1))
+                        + sum(h.stiffness * phi**2 for h, (phi, _, _) in zip(self.hinges, self._hinge_springs(y))))
         potential = 0.0
         if self.has_q:
             potential -= self.loads.distributed_profile(t) * float(np.sum(self.load_vector * y.c))
@@ -648,6 +678,8 @@ class GalerkinBeamProblem(BeamBase):
                 r[h.a] += Ca.T @ lam
                 r[h.b] += Cb.T @ lam
                 couples[h.joint] = h.E.T @ lam
+            for h, (_, _, m) in zip(self.hinges, self._hinge_springs(y)):
+                couples[h.joint] = couples[h.joint] + m * h.axis  # the spring-damper's couple -m axis on b
             share = self._multipliers(self._solve_rotation(r, 0.0), "rotation")
             couples = [c - j.D.T @ d for c, j, d in zip(couples, self.joints, share)]
         return tuple((-lam_f[k], -(y.R[j.point_b] @ couples[k])) for k, j in enumerate(self.joints))

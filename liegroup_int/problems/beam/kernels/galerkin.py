@@ -100,6 +100,9 @@ class GalerkinData(NamedTuple):
     hinge_Z: np.ndarray  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
     hinge_C: np.ndarray  # (2 H, 2, 3) work: constraint rows on rows a, b
     hinge_S: np.ndarray  # (2 H, 2 H + 1) work: capacitance and right-hand side
+    hinge_axis: np.ndarray  # (H, 3) material axis at b, Q = R0_a^T R0_b (H, 3, 3), stiffness and damping (H, 2)
+    hinge_Q: np.ndarray
+    hinge_kc: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -115,7 +118,7 @@ def unpack(flat, head):
         i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), i2(flat, head, 32), f3(flat, head, 33),
         f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37), i1(flat, head, 38),
         f2(flat, head, 39), i2(flat, head, 40), f3(flat, head, 41), f3(flat, head, 42), f3(flat, head, 43),
-        f2(flat, head, 44))
+        f2(flat, head, 44), f2(flat, head, 45), f3(flat, head, 46), f2(flat, head, 47))
 
 
 # ====================================================================== action
@@ -240,6 +243,30 @@ def _constrain(x, jab, jq, Y, Sinv, rotational, r):
             for i in range(x.shape[0]):
                 for q in range(3):
                     x[i, q] -= lam * Y[l, i, q]
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _hinge_springs(d, R, w, out):
+    """The hinges' spring-damper couples ``m = k phi + c dphi/dt`` into ``out[3]`` (``-m
+    axis`` on row b, ``m G axis`` on row a); their power (``-c dphi/dt^2``)
+    (:meth:`GalerkinBeamProblem._hinge_springs`)."""
+    power = 0.0
+    for h in range(d.hinge_ab.shape[0]):
+        k, c = d.hinge_kc[h, 0], d.hinge_kc[h, 1]
+        if k == 0.0 and c == 0.0:
+            continue
+        a, b, pa, pb = d.hinge_ab[h, 0], d.hinge_ab[h, 1], d.hinge_ab[h, 2], d.hinge_ab[h, 3]
+        e0 = (d.hinge_E[h, 0, 0], d.hinge_E[h, 0, 1], d.hinge_E[h, 0, 2])
+        e1 = (d.hinge_E[h, 1, 0], d.hinge_E[h, 1, 1], d.hinge_E[h, 1, 2])
+        ax = row(d.hinge_axis, h)
+        He = rot_T(d.hinge_Q, h, rot_T(R, pa, rot(R, pb, e0)))
+        phi = np.arctan2(dot(e1, He), dot(e0, He))
+        rate = dot(ax, sub(row(w, b), rot_T(R, pb, rot(R, pa, row(w, a)))))
+        m = k * phi + c * rate
+        put(out[3], b, axpy(-m, ax, row(out[3], b)))
+        put(out[3], a, axpy(m, rot_T(R, pa, rot(R, pb, ax)), row(out[3], a)))
+        power -= c * rate * rate
+    return power
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -401,6 +428,7 @@ def rates(c, v, w, R, K, u, out, d):
         wr = row(w, r)
         Jw = (d.body_J[k, 0] * wr[0], d.body_J[k, 1] * wr[1], d.body_J[k, 2] * wr[2])
         put(o3, r, sub(row(o3, r), cross(wr, Jw)))
+    power += _hinge_springs(d, R, w, out)
     _solve(d, w, out, R, u1)
     if not d.power:
         return 0.0
@@ -495,7 +523,10 @@ def _hinge_data(pb) -> dict:
     Z = np.array([[h.Z[f] for f in ("theta", "rotation")] for h in hs], dtype=float).reshape(12 * len(hs), n, 3)
     return {"hinge_ab": np.array([(h.a, h.b, h.point, h.point_b) for h in hs], dtype=np.int64).reshape(len(hs), 4),
             "hinge_E": c64(np.array([h.E for h in hs], dtype=float).reshape(len(hs), 2, 3)), "hinge_Z": c64(Z),
-            "hinge_C": np.zeros((2 * len(hs), 2, 3)), "hinge_S": np.zeros((2 * len(hs), 2 * len(hs) + 1))}
+            "hinge_C": np.zeros((2 * len(hs), 2, 3)), "hinge_S": np.zeros((2 * len(hs), 2 * len(hs) + 1)),
+            "hinge_axis": c64(np.array([h.axis for h in hs], dtype=float).reshape(len(hs), 3)),
+            "hinge_Q": c64(np.array([h.Q for h in hs], dtype=float).reshape(len(hs), 3, 3)),
+            "hinge_kc": c64(np.array([(h.stiffness, h.damping) for h in hs], dtype=float).reshape(len(hs), 2))}
 
 
 def galerkin_data(pb):
