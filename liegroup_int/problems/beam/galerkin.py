@@ -366,7 +366,7 @@ class GalerkinBeamProblem(BeamBase):
         with ``r`` the residual :meth:`_joint_residual`: the columns ``Y = M^-1 C^T``
         ``(3 J, n, 3)`` and ``S^-1 D`` ``(3 J, 3 J)`` with ``S = C M^-1 C^T`` on the
         constrained directions (so ``S^-1 D r`` are the multipliers). The zero rows of ``D``
-        (all three of a ball joint, the axial one of a hinge) are zero in ``Y`` and
+        (ball joints, and hinges: :meth:`_constrain_hinges`) are zero in ``Y`` and
         ``S^-1 D``: their multipliers are exactly 0."""
         k = 3 * len(self.joints)
         D = self._directions(rotational)
@@ -454,9 +454,9 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ RKMK contract
     def project_increment(self, u: np.ndarray) -> np.ndarray:
         """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
-        and velocity; for Theta and W the components along ``D`` of ``u_b - Q^T u_a`` set to
-        zero: ``Q^T u_a`` at a rigid joint, the perpendicular part at a hinge): the increments
-        that keep the members joined. The stage rates satisfy this already; a perturbation that breaks a
+        and velocity; for Theta and W ``Q^T u_a`` at a rigid joint, the components along ``D``
+        of ``u_b - Q^T u_a`` set to zero; a hinge's rotations, whose constraints depend on the
+        state, are left to its rates): the increments that keep the members joined. The stage rates satisfy this already; a perturbation that breaks a
         joint (a finite-difference Jacobian's) then moves nothing, so the spectrum gets
         exact zeros for those directions instead of noise."""
         if not self.joints:
@@ -662,7 +662,8 @@ class GalerkinBeamProblem(BeamBase):
         """Force and couple (spatial) that the first end of each joint pair exerts on the
         second, ``((force, couple), ...)`` with ``(3,)`` each: minus the Lagrange multipliers
         of the position and rotation constraints (``M x = f - C^T lambda``; the couple is
-        zero at a ball joint, perpendicular to the axis at a hinge). Joint point loads act on
+        zero at a ball joint; at a hinge, the hinge's multipliers, perpendicular to the
+        deformed axis, plus its spring-damper's couple along it). Joint point loads act on
         the first end."""
         if not self.joints:
             return ()

@@ -7,8 +7,9 @@ Same mathematics as the NumPy path of :mod:`..galerkin`, one loop over the point
   ``R <- R exp(hat(Theta))``, ``K <- exp(-Theta) K + J_r(Theta) Theta_s``; ``c, v, w`` plus
   their increments.
 * :func:`rates`: strains, resultants, the weak-form forces and the projected
-  ``dexpinv`` scattered onto the control values in the same loop, end loads, then the
-  banded Cholesky solves with the supported rows prescribed and the joints' constraints;
+  ``dexpinv`` scattered onto the control values in the same loop, end loads and hinge
+  springs, then the banded Cholesky solves with the supported rows prescribed and the
+  joints' constraints (the hinges' rebuilt from the state at every stage);
   returns the power of the loads and supports minus the dissipation.
 
 The data: :class:`GalerkinData`, packed by :func:`.adapters.pack`. ``loads`` holds the
@@ -90,7 +91,7 @@ class GalerkinData(NamedTuple):
     joint_ab: np.ndarray  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
     joint_q: np.ndarray
     Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
-    Sinv: np.ndarray  # (3, 3 J, 3 J) S^-1 D: the free directions (ball, hinge axis) are 0 in Y, Sinv (lam = 0)
+    Sinv: np.ndarray  # (3, 3 J, 3 J) S^-1 D: ball joints and hinges are 0 in Y[1:], Sinv[1:] (lam = 0)
     keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
     jr: np.ndarray  # (3 J,) work
     body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
