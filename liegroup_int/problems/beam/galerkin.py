@@ -213,11 +213,7 @@ class GalerkinBeamProblem(BeamBase):
         self.mass_position = BandedSPD(self._M_mu, fixp)
         self.mass_theta = BandedSPD(gs.point_mass, fixr)
         self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
-        self._constraints = {
-            "position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
-            "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
-            "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True),
-        } if self.joints else {}
+        self._constraints = self._joint_constraints()
         self.hinges = self._hinges(space)
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
@@ -264,6 +260,14 @@ class GalerkinBeamProblem(BeamBase):
             D = np.eye(3) if kind == "rigid" else np.zeros((3, 3))
             out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D, kind))
         return tuple(out)
+
+    def _joint_constraints(self) -> dict:
+        """``(Y, S^-1 D)`` of the constant joint constraints per field (:meth:`_constraint`)."""
+        if not self.joints:
+            return {}
+        return {"position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
+                "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
+                "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True)}
 
     def _hinges(self, space) -> tuple:
         """:class:`_GHinge` of each hinge pair (after the constant constraints)."""
