@@ -4,8 +4,9 @@ By default the patches form a chain: patch ``k`` ends where patch ``k + 1`` star
 end control values there are two unknowns (one per patch) that the beam plugin keeps equal
 (a rigid joint, docs/theory.md section 13). An explicit list of joints between any two patch
 ends makes any graph (T and X junctions, closed rings, trees); a joint of ``k`` ends is
-``k - 1`` pairs to its first end, each ``"rigid"`` (equal position and rotation) or
-``"ball"`` (equal position, rotations free). Every matrix is block-diagonal, one block per
+``k - 1`` pairs to its first end, each ``"rigid"`` (equal position and rotation),
+``"ball"`` (equal position, rotations free) or ``"hinge"`` (equal position, relative
+rotation about an axis only). Every matrix is block-diagonal, one block per
 patch, so the patches' interpolation, derivatives and ``M_c`` solve stay their own.
 
 Global parameter: patch ``k`` covers ``u in [U_k, U_k+1]`` with ``U_k`` the fraction of the
@@ -23,8 +24,9 @@ from .nurbs import NurbsCurve, insert_knots
 
 __all__ = ["JOINT_KINDS", "PatchedSpace", "split_curve"]
 
-#: Kinds of joint: equal positions and rotations, or equal positions only.
-JOINT_KINDS = ("rigid", "ball")
+#: Kinds of joint: equal positions and rotations, equal positions only, or equal positions
+#: and rotations but for a turn about an axis.
+JOINT_KINDS = ("rigid", "ball", "hinge")
 #: Sides of a patch: its start (``u = 0``) and its end (``u = 1``).
 SIDES = ("start", "end")
 
@@ -44,6 +46,36 @@ def _block_diag(blocks) -> np.ndarray:
 def _cat(arrays) -> np.ndarray:
     out = np.concatenate([np.asarray(a) for a in arrays])
     out.setflags(write=False)
+    return out
+
+
+def _hinge_axes(kinds, axes) -> tuple:
+    """The unit axis of each hinge pair (None for the other kinds)."""
+    axes = tuple(axes) if axes is not None else (None,) * len(kinds)
+    if len(axes) != len(kinds):
+        raise ValueError(f"axes: one per joint ({len(kinds)}), got {len(axes)}")
+    out = []
+    for k, (kind, a) in enumerate(zip(kinds, axes)):
+        if kind != "hinge":
+            out.append(None)
+            continue
+        a = np.zeros(3) if a is None else np.asarray(a, dtype=float)
+        norm = float(np.linalg.norm(a)) if a.shape == (3,) else 0.0
+        if not (np.isfinite(norm) and norm > 0.0):
+            raise ValueError(f"joint {k + 1}: a hinge needs a finite non-zero axis [x, y, z], got "
+                             f"{np.asarray(a).tolist()}")
+        out.append(a / norm)
+    return tuple(out)
+
+
+def _springs(n: int, springs) -> tuple:
+    """``(stiffness, damping)`` of each pair, checked finite and ``>= 0``."""
+    out = tuple((float(k), float(c)) for k, c in springs) if springs is not None else ((0.0, 0.0),) * n
+    if len(out) != n:
+        raise ValueError(f"springs: one (stiffness, damping) per joint ({n}), got {len(out)}")
+    for i, kc in enumerate(out):
+        if not all(np.isfinite(v) and v >= 0.0 for v in kc):
+            raise ValueError(f"joint {i + 1}: spring stiffness and damping must be finite and >= 0, got {list(kc)}")
     return out
 
 
@@ -86,6 +118,12 @@ class PatchedSpace:
         joints form no redundant loop of constraints).
     kinds : sequence of str, optional
         Kind of each pair of ``joints``, one of :data:`JOINT_KINDS` (default all rigid).
+    axes : sequence of (array_like (3,) or None), optional
+        Hinge axis of each pair (spatial, reference configuration; non-zero for a
+        ``"hinge"`` pair, ignored for the others).
+    springs : sequence of (float, float), optional
+        Rotational spring stiffness [N m/rad] and damper [N m s/rad] about the axis of each
+        pair (``>= 0``; used at hinges only, default 0).
 
     Attributes
     ----------
@@ -96,7 +134,9 @@ class PatchedSpace:
         Global rows ``(a, b)`` of each joint pair (chain: the last row of patch ``k`` and
         the first of patch ``k + 1``).
     joint_ends : tuple of ((int, str), (int, str))
-        The patch ends of each pair; ``joint_kinds``: their kinds (tuple of str).
+        The patch ends of each pair; ``joint_kinds``: their kinds (tuple of str);
+        ``joint_axes``: the unit hinge axis of each pair, ``(3,)`` (None but at hinges);
+        ``joint_springs``: ``(stiffness, damping)`` of each pair.
     chain : bool
         The patches form the implied chain (no explicit ``joints``).
     n_ctrl, degree : int
@@ -114,7 +154,7 @@ class PatchedSpace:
     bandwidths : tuple of int
     """
 
-    def __init__(self, spaces, joints=None, kinds=None) -> None:
+    def __init__(self, spaces, joints=None, kinds=None, axes=None, springs=None) -> None:
         spaces = tuple(spaces)
         if len(spaces) < 1 or not all(isinstance(s, CollocationSpace) for s in spaces):
             raise ValueError("PatchedSpace needs one or more CollocationSpace patches")
@@ -134,6 +174,8 @@ class PatchedSpace:
             raise ValueError(f"kinds: one of {', '.join(JOINT_KINDS)} per joint ({len(self.joint_ends)}), "
                              f"got {list(kinds)}")
         self.joint_kinds = kinds
+        self.joint_axes = _hinge_axes(kinds, axes)
+        self.joint_springs = _springs(len(kinds), springs)
         self.joints = tuple((self.end_row(*a), self.end_row(*b)) for a, b in self.joint_ends)
         self._check_joints()
         self._u_edges = np.concatenate([[0.0], np.cumsum(lengths) / self.length])

@@ -153,7 +153,9 @@ KEYS = {
             "X junctions, closed rings, trees; galerkin): ends, the coinciding member ends joined at one point "
             "(\"<name>.start\" or \"<name>.end\" of named [[beams]] entries, two or more; each end in one joint "
             "at most, and not a supported end: support a frame through an end of its own), and kind: rigid (equal "
-            "position and rotation, the default) or ball (equal position, rotations free: no couple transmitted)"),
+            "position and rotation, the default), ball (equal position, rotations free: no couple transmitted) "
+            "or hinge (equal position, relative rotation about axis only: no couple about the axis but that of "
+            "its rotational spring and damper, stiffness and damping)"),
         Key("point_loads", "tables", (), "[[point_loads]] entries: s (fraction of the reference length, inside "
             "(0, 1); members in [[beams]] order), force and couple (spatial, dead), and a time profile (profile, "
             "t_on, t_off, ramp, table); a beam is split at s into two patches joined rigidly, where the load acts "
@@ -248,8 +250,13 @@ BEAM_KEYS = {
 #: Keys of one ``[[joints]]`` entry.
 JOINT_KEYS = {
     "ends": Key("ends", "strs", (), "the joined member ends, \"<name>.start\" or \"<name>.end\" (two or more)"),
-    "kind": Key("kind", "str", "rigid", "rigid (position and rotation) or ball (position only)",
-                choices=JOINT_KINDS),
+    "kind": Key("kind", "str", "rigid", "rigid (position and rotation), ball (position only) or hinge "
+                "(position, and rotation but for a turn about the axis)", choices=JOINT_KINDS),
+    "axis": Key("axis", "vec3", ZERO, "hinge axis (spatial, reference configuration; kind = \"hinge\" only)"),
+    "stiffness": Key("stiffness", "float", 0.0, "rotational spring about the hinge axis: couple k phi, phi the "
+                     "relative rotation angle (|phi| < pi; kind = \"hinge\" only)", "N m/rad", non_negative),
+    "damping": Key("damping", "float", 0.0, "rotational damper about the hinge axis: couple c dphi/dt "
+                   "(kind = \"hinge\" only)", "N m s/rad", non_negative),
 }
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
@@ -406,8 +413,8 @@ def frame_space(scene: Scene):
         _split_pieces(scene, frame, s, i, load)
     joint_loads, graph = frame["joint_loads"], {}
     if scene["joints"]:
-        pairs, kinds, joint_loads = _graph(scene, frame)
-        graph = {"joints": pairs, "kinds": kinds}
+        pairs, kinds, axes, springs, joint_loads = _graph(scene, frame)
+        graph = {"joints": pairs, "kinds": kinds, "axes": axes, "springs": springs}
     try:
         space = PatchedSpace(frame["spaces"], **graph)
     except ValueError as exc:
@@ -434,15 +441,17 @@ def _member_names(scene: Scene) -> list:
 
 
 def _graph(scene: Scene, frame: dict) -> tuple:
-    """Joint pairs ``((piece, side), (piece, side))``, their kinds and point loads: the
+    """Joint pairs ``((piece, side), (piece, side))``, their kinds, hinge axes, springs and point loads: the
     pieces of each split member in a rigid chain, and each ``[[joints]]`` entry's ends
     joined to its first end (one-line errors naming the entry and key)."""
     names, members, spaces = _member_names(scene), frame["members"], frame["spaces"]
-    pairs, kinds, loads = [], [], []
+    pairs, kinds, axes, springs, loads = [], [], [], [], []
     for k in range(len(members) - 1):
         if members[k] == members[k + 1]:
             pairs.append(((k, "end"), (k + 1, "start")))
             kinds.append("rigid")
+            axes.append(None)
+            springs.append((0.0, 0.0))
             loads.append(frame["joint_loads"][k])
     supported = {f"{names[0]}.start": "bc.start", f"{names[-1]}.end": "bc.end"}
     used: dict = {}
@@ -464,8 +473,25 @@ def _graph(scene: Scene, frame: dict) -> tuple:
                                  f"{v['ends'][0]!r} at {np.round(pos[0], 6).tolist()}; joined ends must coincide")
         pairs += [(ends[0], e) for e in ends[1:]]
         kinds += [v["kind"]] * (len(ends) - 1)
+        axes += [_hinge_axis(where, v)] * (len(ends) - 1)
+        springs += [(v["stiffness"], v["damping"])] * (len(ends) - 1)
         loads += [None] * (len(ends) - 1)
-    return pairs, kinds, loads
+    return pairs, kinds, axes, springs, loads
+
+
+def _hinge_axis(where: str, v: dict):
+    """The axis of a ``[[joints]]`` entry: given and non-zero for a hinge, absent otherwise
+    (as its spring and damper)."""
+    a = np.asarray(v["axis"], dtype=float)
+    if v["kind"] != "hinge":
+        for key in ("axis", "stiffness", "damping"):
+            if np.any(v[key]):
+                raise SceneError(f"{where}: key '{key}': only a hinge has an axis, a spring and a damper "
+                                 f"(kind = {v['kind']!r})")
+        return None
+    if not np.all(np.isfinite(a)) or not np.any(a):
+        raise SceneError(f"{where}: key 'axis' = {a.tolist()}: a hinge needs a finite non-zero axis [x, y, z]")
+    return a
 
 
 def _joint_end(scene: Scene, where: str, end: str, names: list, members: list, used: dict, supported: dict):
@@ -946,9 +972,10 @@ def refine(scene: Scene) -> tuple[dict | None, str]:
 
 def constrained(pb: BeamProblem) -> int:
     """Degrees of freedom held by the supports (3 per held position or rotation) and the
-    joints (6 per rigid pair, 3 per ball pair)."""
+    joints (6 per rigid pair, 5 per hinge, 3 per ball pair)."""
     ends = sum(3 * (bool(e.fix_position) + bool(e.fix_rotation)) for e in pb.ends)
-    return ends + sum(3 + 3 * bool(getattr(j, "rigid", True)) for j in getattr(pb, "joints", ()))
+    rotations = {"rigid": 3, "hinge": 2, "ball": 0}
+    return ends + sum(3 + rotations[getattr(j, "kind", "rigid")] for j in getattr(pb, "joints", ()))
 
 
 KIND = register_kind(ProblemKind(

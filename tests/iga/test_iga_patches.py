@@ -68,5 +68,14 @@ def test_explicit_joints_any_ends():
         PatchedSpace([post, left, right], joints=[((1, "end"), (2, "end"))])
     with pytest.raises(ValueError, match=r"joint 2: patch end \(1, 'start'\) is joined twice"):
         PatchedSpace([post, left, right], joints=[pairs[0], ((2, "start"), (1, "start"))])
-    with pytest.raises(ValueError, match="kinds: one of rigid, ball per joint"):
+    with pytest.raises(ValueError, match="kinds: one of rigid, ball, hinge per joint"):
+        PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "slider"])
+    with pytest.raises(ValueError, match=r"joint 2: a hinge needs a finite non-zero axis"):
         PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "hinge"])
+    sp = PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "hinge"], axes=[None, (0, 2, 0)],
+                      springs=[(0, 0), (3.0, 0.5)])
+    assert sp.joint_axes[0] is None and np.array_equal(sp.joint_axes[1], [0.0, 1.0, 0.0])
+    assert sp.joint_springs == ((0.0, 0.0), (3.0, 0.5))
+    with pytest.raises(ValueError, match=r"joint 2: spring stiffness and damping must be finite and >= 0"):
+        PatchedSpace([post, left, right], joints=pairs, kinds=["rigid", "hinge"], axes=[None, (0, 1, 0)],
+                     springs=[(0, 0), (-1.0, 0.0)])

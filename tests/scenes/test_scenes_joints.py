@@ -233,7 +233,7 @@ def _joints(*entries):
      r"joints\[0\]: key 'ends': 'left.start' is already joined \(joints\[0\]\)"),
     (_joints({"ends": ["post.start", "left.end"]}),
      r"joints\[0\]: key 'ends': 'post.start' is supported \(bc.start = 'clamped'\); a joint takes free ends only"),
-    (_joints({"ends": T_JOINT, "kind": "hinge"}), r"joints\[0\]: key 'kind' = 'hinge': expected one of"),
+    (_joints({"ends": T_JOINT, "kind": "slider"}), r"joints\[0\]: key 'kind' = 'slider': expected one of"),
     (_joints({"ends": T_JOINT, "knd": "ball"}), r"joints\[0\]: unknown key 'knd'"),
     ({"space.formulation": "mixed", "material.kelvin_voigt": 0.0},
      r"the collocation formulations join patches in a chain only"),

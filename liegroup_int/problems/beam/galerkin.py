@@ -34,11 +34,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3, left_jacobian
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
 from .base import SECTION_FIELDS, BeamBase
-from .kinematics import jr_times, rot, rot_T
+from .kinematics import jr_times, perpendicular_rows, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
 
 #: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
@@ -66,7 +66,10 @@ class GalerkinBeamState:
 class _GJoint(NamedTuple):
     """One joint pair: control rows ``a, b`` of the two patch ends, the point at ``a``,
     ``Q = R0_a^T R0_b``, the point load (or None, acting on row ``a``), the point at ``b``,
-    rigid (else a ball joint)."""
+    rigid (else a ball joint or a hinge), ``D`` ``(3, 3)``: the rows of the constant
+    constrained directions of the rotational residual ``x[b] - Q^T x[a]`` (material
+    components at ``b``): the identity (rigid) or zero (ball; hinge, whose constraints
+    depend on the state: :class:`_GHinge`), and the kind."""
 
     a: int
     b: int
@@ -75,6 +78,35 @@ class _GJoint(NamedTuple):
     load: object
     point_b: int
     rigid: bool
+    D: np.ndarray
+    kind: str = "rigid"
+
+
+class _GHinge(NamedTuple):
+    """One hinge pair: the index of its :class:`_GJoint`, its control rows and points,
+    ``E`` ``(2, 3)``: two orthonormal rows perpendicular to the material axis at ``b``
+    (``R0_b^T axis``), and per rotational field (``"theta"``, ``"rotation"``) the responses
+    ``Z`` ``(2, 3, n, 3)`` of the mass matrix constrained by the constant joints,
+    ``M_c^-1 (e_row e_c^T)``, for the rows ``a`` then ``b`` and the components ``c``.
+
+    Its constraints keep the deformed axes of both ends equal, ``R_a R0_a^T axis = R_b
+    R0_b^T axis``: on the material angular velocities ``E (W_b - G^T W_a) = 0`` and on the
+    rotation rates ``E (A_b Theta'_b - G^T A_a Theta'_a) = 0`` with ``G = R_a^T R_b`` and
+    ``A = dexp_{-Theta}`` at the ends (:meth:`GalerkinBeamProblem._hinge_rows`). ``axis``:
+    the unit material axis at ``b`` ``(3,)`` (``E[0], E[1], axis`` right-handed), ``Q`` as
+    the joint's, ``stiffness`` and ``damping`` of its rotational spring-damper."""
+
+    joint: int
+    a: int
+    b: int
+    point: int
+    point_b: int
+    E: np.ndarray
+    Z: dict
+    axis: np.ndarray
+    Q: np.ndarray
+    stiffness: float
+    damping: float
 
 
 @dataclass(frozen=True)
@@ -181,14 +213,12 @@ class GalerkinBeamProblem(BeamBase):
         self.mass_position = BandedSPD(self._M_mu, fixp)
         self.mass_theta = BandedSPD(gs.point_mass, fixr)
         self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
-        self._constraints = {
-            "position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
-            "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
-            "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True),
-        } if self.joints else {}
+        self._constraints = self._joint_constraints()
+        self.hinges = self._hinges(space)
         self.quad = gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
-                                   or self.translating_ends or self.point_loads)
+                                   or self.translating_ends or self.point_loads
+                                   or any(h.damping > 0.0 for h in self.hinges))
 
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
         """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
@@ -219,14 +249,99 @@ class GalerkinBeamProblem(BeamBase):
     def _joints(self, space, loads) -> tuple:
         """:class:`_GJoint` of each joint pair: the control rows of the two patch ends, the
         points there, the relative reference rotation ``Q = R0_a^T R0_b``, the point load
-        (or None) and whether it is rigid (a ball joint: positions only)."""
+        (or None), whether it is rigid and its constrained rotational directions ``D``."""
         kinds = getattr(space, "joint_kinds", ())
+        axes = getattr(space, "joint_axes", (None,) * len(kinds))
         points = self._end_points(space)
         out = []
         for k, (a, b), ld in self.joint_loads(space, loads):
             pa, pb = points[a], points[b]
-            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kinds[k] == "rigid"))
+            kind = kinds[k] if kinds else "rigid"
+            D = np.eye(3) if kind == "rigid" else np.zeros((3, 3))
+            out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D, kind))
         return tuple(out)
+
+    def _joint_constraints(self) -> dict:
+        """``(Y, S^-1 D)`` of the constant joint constraints per field (:meth:`_constraint`)."""
+        if not self.joints:
+            return {}
+        return {"position": self._constraint(lambda r: self.mass_position.solve(r), rotational=False),
+                "theta": self._constraint(lambda r: self.mass_theta.solve(r), rotational=True),
+                "rotation": self._constraint(lambda r: self._solve_rotation(r, 0.0), rotational=True)}
+
+    def _hinges(self, space) -> tuple:
+        """:class:`_GHinge` of each hinge pair (after the constant constraints)."""
+        axes, springs = getattr(space, "joint_axes", ()), getattr(space, "joint_springs", ())
+        out = []
+        for k, j in enumerate(self.joints):
+            if j.kind != "hinge":
+                continue
+            axis = self.gs.R0[j.point_b].T @ axes[k]
+            E = perpendicular_rows(axis)
+            Z = {}
+            for field, solve in (("theta", self.mass_theta.solve), ("rotation", lambda r: self._solve_rotation(r, 0.0))):
+                Z[field] = np.zeros((2, 3, self.n, 3))
+                for e, row in enumerate((j.a, j.b)):
+                    for c in range(3):
+                        r = np.zeros((self.n, 3))
+                        r[row, c] = 1.0
+                        Z[field][e, c] = self._constrain(solve(r), field)
+            out.append(_GHinge(k, j.a, j.b, j.point, j.point_b, E, Z, axis / np.linalg.norm(axis), j.Q, *springs[k]))
+        return tuple(out)
+
+    def _hinge_springs(self, y) -> list:
+        """``(phi, dphi/dt, k phi + c dphi/dt)`` of each hinge: the relative rotation angle
+        about the axis, ``H = Q^T R_a^T R_b = exp(phi hat(axis))`` read as ``phi =
+        atan2(E_1 . H E_0, E_0 . H E_0)`` in ``(-pi, pi]``, its rate ``axis . (W_b - G^T W_a)``
+        and the spring-damper couple. Its generalized forces are ``-m axis`` on row ``b`` and
+        ``m G axis`` on row ``a`` (material), the gradient of ``1/2 k phi^2`` for the elastic
+        part: ``dphi = axis . (dTheta_b - G^T dTheta_a)``."""
+        out = []
+        for h in self.hinges:
+            G = y.R[h.point].T @ y.R[h.point_b]
+            He = h.Q.T @ G @ h.E[0]
+            phi = float(np.arctan2(h.E[1] @ He, h.E[0] @ He))
+            rate = float(h.axis @ (y.w[h.b] - G.T @ y.w[h.a]))
+            out.append((phi, rate, h.stiffness * phi + h.damping * rate))
+        return out
+
+    def _hinge_rows(self, y, u: np.ndarray, field: str) -> tuple:
+        """Per hinge the constraint rows on row ``a`` and row ``b`` and the right-hand side,
+        ``(Ca, Cb, g)`` with ``(2, 3), (2, 3), (2,)``: ``W`` (``"rotation"``): ``Cb = E``,
+        ``Ca = -E G^T``, ``g = -E (W_b x G^T W_a)`` (the time derivative of ``G^T``
+        acting on ``W_a``); ``Theta'`` (``"theta"``): ``Cb = E A_b``, ``Ca = -E G^T A_a``,
+        ``g = 0``."""
+        out = []
+        for h in self.hinges:
+            G = y.R[h.point].T @ y.R[h.point_b]
+            if field == "rotation":
+                g = -h.E @ np.cross(y.w[h.b], G.T @ y.w[h.a])
+                out.append((-h.E @ G.T, h.E, g))
+            else:
+                Aa, Ab = left_jacobian(-u[1][h.a]), left_jacobian(-u[1][h.b])
+                out.append((-h.E @ G.T @ Aa, h.E @ Ab, np.zeros(2)))
+        return tuple(out)
+
+    def _hinge_multipliers(self, x: np.ndarray, y, u: np.ndarray, field: str):
+        """``(lambda, Y)``: the hinges' multipliers ``(H, 2)`` for the solution ``x`` of one
+        rotational field (constant joints applied) and their columns ``Y`` ``(2 H, n, 3)``."""
+        rows = self._hinge_rows(y, u, field)
+        Ys = [np.tensordot(Ca[k], h.Z[field][0], 1) + np.tensordot(Cb[k], h.Z[field][1], 1)
+              for h, (Ca, Cb, _) in zip(self.hinges, rows) for k in range(2)]
+
+        def C(v):
+            return np.concatenate([Ca @ v[h.a] + Cb @ v[h.b] for h, (Ca, Cb, _) in zip(self.hinges, rows)])
+
+        S = np.array([C(Yl) for Yl in Ys]).T
+        g = np.concatenate([r[2] for r in rows])
+        return np.linalg.solve(S, C(x) - g).reshape(-1, 2), np.array(Ys)
+
+    def _constrain_hinges(self, x: np.ndarray, y, u: np.ndarray, field: str) -> np.ndarray:
+        """``x - Y S^-1 (C x - g)``: the hinges' constraints on one rotational field."""
+        if not self.hinges:
+            return x
+        lam, Y = self._hinge_multipliers(x, y, u, field)
+        return x - np.tensordot(lam.ravel(), Y, axes=1)
 
     def _end_points(self, space) -> dict:
         """``{control row: point}`` of every patch end (the basis interpolates there)."""
@@ -237,34 +352,49 @@ class GalerkinBeamProblem(BeamBase):
         return out
 
     def _joint_residual(self, x: np.ndarray, rotational: bool) -> np.ndarray:
-        """``C x``: ``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint pair, ``(3 J,)``."""
+        """``x[b] - Q^T x[a]`` (``x[b] - x[a]`` for positions) per joint pair, ``(3 J,)``:
+        ``C x`` for the rigid pairs; the constraints are its components along the rows of
+        each pair's ``D`` (positions: all three)."""
         return np.concatenate([x[j.b] - (j.Q.T @ x[j.a] if rotational else x[j.a]) for j in self.joints])
 
+    def _directions(self, rotational: bool) -> np.ndarray:
+        """Block diagonal ``(3 J, 3 J)`` of the pairs' constrained directions ``D`` (the
+        identity for positions)."""
+        D = np.zeros((3 * len(self.joints),) * 2)
+        for j, jt in enumerate(self.joints):
+            D[3 * j:3 * j + 3, 3 * j:3 * j + 3] = jt.D if rotational else np.eye(3)
+        return D
+
     def _constraint(self, solve, rotational: bool):
-        """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field: the columns
-        ``Y = M^-1 C^T`` ``(3 J, n, 3)`` and the inverse of ``S = C M^-1 C^T``. A rotational
-        field constrains the rigid pairs only: the rows of a ball joint are zero in ``Y`` and
-        ``S^-1``, so their multipliers are exactly 0."""
+        """``(Y, S^-1)`` of the joint constraints ``C x = 0`` for one field, ``C x = D r``
+        with ``r`` the residual :meth:`_joint_residual`: the columns ``Y = M^-1 C^T``
+        ``(3 J, n, 3)`` and ``S^-1 D`` ``(3 J, 3 J)`` with ``S = C M^-1 C^T`` on the
+        constrained directions (so ``S^-1 D r`` are the multipliers). The zero rows of ``D``
+        (ball joints, and hinges: :meth:`_constrain_hinges`) are zero in ``Y`` and
+        ``S^-1 D``: their multipliers are exactly 0."""
         k = 3 * len(self.joints)
+        D = self._directions(rotational)
         Y = np.zeros((k, self.n, 3))
         for j, jt in enumerate(self.joints):
-            if rotational and not jt.rigid:
-                continue
             for e in range(3):
+                d = D[3 * j + e, 3 * j:3 * j + 3]
+                if not np.any(d):
+                    continue
                 r = np.zeros((self.n, 3))
-                r[jt.b, e] = 1.0
-                r[jt.a] -= jt.Q[:, e] if rotational else np.eye(3)[:, e]
+                r[jt.b] = d
+                r[jt.a] -= jt.Q @ d if rotational else d
                 Y[3 * j + e] = solve(r)
-        live = np.repeat([jt.rigid or not rotational for jt in self.joints], 3)
+        live = np.any(D != 0.0, axis=1)
         Sinv = np.zeros((k, k))
         if np.any(live):
-            S = np.array([self._joint_residual(y, rotational) for y in Y[live]]).T[live]
-            Sinv[np.ix_(live, live)] = np.linalg.inv(S)
+            S = (D @ np.array([self._joint_residual(y, rotational) for y in Y[live]]).T)[live]
+            Sinv[live] = np.linalg.solve(S, D[live])
         return Y, Sinv
 
     def _multipliers(self, x: np.ndarray, field: str) -> np.ndarray:
         """The joints' multipliers ``S^-1 C x`` of the unconstrained solution ``x`` of one
-        field, ``(J, 3)`` (zero rows for the rotations of ball joints)."""
+        field, ``(J, 3)``, along the rows of each pair's ``D`` (zero for the free
+        directions)."""
         Y, Sinv = self._constraints[field]
         return (Sinv @ self._joint_residual(x, field != "position")).reshape(-1, 3)
 
@@ -328,8 +458,9 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ RKMK contract
     def project_increment(self, u: np.ndarray) -> np.ndarray:
         """``u`` with the joints' second rows set from the first (``u_b = u_a`` for position
-        and velocity, ``Q^T u_a`` for Theta and W at a rigid joint): the increments that keep
-        the members joined. The stage rates satisfy this already; a perturbation that breaks a
+        and velocity; for Theta and W ``Q^T u_a`` at a rigid joint, the components along ``D``
+        of ``u_b - Q^T u_a`` set to zero; a hinge's rotations, whose constraints depend on the
+        state, are left to its rates): the increments that keep the members joined. The stage rates satisfy this already; a perturbation that breaks a
         joint (a finite-difference Jacobian's) then moves nothing, so the spectrum gets
         exact zeros for those directions instead of noise."""
         if not self.joints:
@@ -337,8 +468,9 @@ class GalerkinBeamProblem(BeamBase):
         u = np.array(u, dtype=float, copy=True)
         for j in self.joints:
             u[[0, 2], j.b] = u[[0, 2], j.a]
-            if j.rigid:
-                u[[1, 3], j.b] = u[[1, 3], j.a] @ j.Q
+            if np.any(j.D):
+                P = j.D.T @ j.D  # projector on the constrained directions
+                u[[1, 3], j.b] -= (u[[1, 3], j.b] - u[[1, 3], j.a] @ j.Q) @ P
         return u
 
     def action(self, u: np.ndarray, y: GalerkinBeamState) -> GalerkinBeamState:
@@ -368,10 +500,12 @@ class GalerkinBeamProblem(BeamBase):
         out[0] = y.v
         Om = self.B0 @ y.w
         # Theta' = dexpinv_{-Theta}(Omega), projected; at a clamp Theta' = W (parallel)
-        out[1] = self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w)
+        out[1] = self._constrain_hinges(self._project_rotation(dexpinv_so3(-(self.B0 @ u[1]), Om), y.w), y, u, "theta")
         F, T = self._forces(t, y, Om)
         out[2] = self._constrain(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")), "position")
-        out[3] = self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
+        out[3] = self._constrain_hinges(
+            self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation"), y, u,
+            "rotation")
         return out
 
     def _prescribed_acceleration(self, t: float, which: str) -> np.ndarray:
@@ -421,6 +555,9 @@ class GalerkinBeamProblem(BeamBase):
             F += f * self.load_vector
         for row, _, body in self.bodies:
             T[row] -= np.cross(y.w[row], np.multiply(body.inertia, y.w[row]))
+        for h, (_, _, m) in zip(self.hinges, self._hinge_springs(y)):
+            T[h.b] -= m * h.axis
+            T[h.a] += m * (y.R[h.point].T @ (y.R[h.point_b] @ h.axis))
         for row, point, ld in self.point_loads:
             Re = R[point]
             if np.any(ld.force):
@@ -457,6 +594,8 @@ class GalerkinBeamProblem(BeamBase):
             Gt = rot_T(y.R, self.B1 @ y.c)
             gd, kd = self._strain_rates(y, Gt, Om)
             p -= self.tau * float(self.wa @ np.sum(self.CN * gd**2, axis=1) + self.wf @ np.sum(self.CM * kd**2, axis=1))
+        for h, (_, rate, _) in zip(self.hinges, self._hinge_springs(y)):
+            p -= h.damping * rate**2
         if self.has_q or self.has_m:
             f = self.loads.distributed_profile(t)
             if self.has_q:
@@ -484,7 +623,8 @@ class GalerkinBeamProblem(BeamBase):
                      + sum(float(y.w[:, d] @ (self._M_J[d] @ y.w[:, d])) for d in range(3)))
         Gt, N, Mm = self._resultants_elastic(y)
         strain = 0.5 * (float(self.wa @ np.sum(N * (Gt - self.gs.gamma0), axis=1))
-                        + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1)))
+                        + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1))
+                        + sum(h.stiffness * phi**2 for h, (phi, _, _) in zip(self.hinges, self._hinge_springs(y))))
         potential = 0.0
         if self.has_q:
             potential -= self.loads.distributed_profile(t) * float(np.sum(self.load_vector * y.c))
@@ -526,14 +666,28 @@ class GalerkinBeamProblem(BeamBase):
         """Force and couple (spatial) that the first end of each joint pair exerts on the
         second, ``((force, couple), ...)`` with ``(3,)`` each: minus the Lagrange multipliers
         of the position and rotation constraints (``M x = f - C^T lambda``; the couple is
-        zero at a ball joint). Joint point loads act on the first end."""
+        zero at a ball joint; at a hinge, the hinge's multipliers, perpendicular to the
+        deformed axis, plus its spring-damper's couple along it). Joint point loads act on
+        the first end."""
         if not self.joints:
             return ()
         F, T = self._forces(t, y, self.B0 @ y.w)
         lam_f = self._multipliers(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")),
                                   "position")
-        lam_c = self._multipliers(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation")
-        return tuple((-lam_f[k], -(y.R[j.point_b] @ lam_c[k])) for k, j in enumerate(self.joints))
+        x = self._solve_rotation(T, self._prescribed_acceleration(t, "rotation"))
+        couples = [j.D.T @ lam for j, lam in zip(self.joints, self._multipliers(x, "rotation"))]
+        if self.hinges:
+            lam_h, _ = self._hinge_multipliers(self._constrain(x, "rotation"), y, np.zeros((4, self.n, 3)), "rotation")
+            r = np.zeros((self.n, 3))  # C_h^T lambda_h: the constant joints' share of it comes off theirs
+            for h, (Ca, Cb, _), lam in zip(self.hinges, self._hinge_rows(y, None, "rotation"), lam_h):
+                r[h.a] += Ca.T @ lam
+                r[h.b] += Cb.T @ lam
+                couples[h.joint] = h.E.T @ lam
+            for h, (_, _, m) in zip(self.hinges, self._hinge_springs(y)):
+                couples[h.joint] = couples[h.joint] + m * h.axis  # the spring-damper's couple -m axis on b
+            share = self._multipliers(self._solve_rotation(r, 0.0), "rotation")
+            couples = [c - j.D.T @ d for c, j, d in zip(couples, self.joints, share)]
+        return tuple((-lam_f[k], -(y.R[j.point_b] @ couples[k])) for k, j in enumerate(self.joints))
 
     def reactions(self, y, t: float = 0.0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Force and couple (spatial) each support exerts on the beam: the residuals of the

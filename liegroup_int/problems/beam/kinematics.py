@@ -95,3 +95,14 @@ def strain_rates(R: np.ndarray, c_s: np.ndarray, v_s: np.ndarray, w: np.ndarray,
     """Objective material strain rates ``dGamma/dt = R^T (v_s - omega x c_s)`` and
     ``dK/dt = R^T omega_s`` (spatial ``omega``, ``dR/dt = hat(omega) R``), ``(n, 3)`` each."""
     return rot_T(R, v_s - cross(w, c_s)), rot_T(R, w_s)
+
+
+def perpendicular_rows(a: np.ndarray) -> np.ndarray:
+    """Two orthonormal rows perpendicular to the non-zero vector ``a`` ``(3,)``, ``(2, 3)``
+    (completed from the coordinate axis least aligned with ``a``)."""
+    a = np.asarray(a, dtype=float) / np.linalg.norm(a)
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(a)))] = 1.0
+    p = e - (e @ a) * a
+    p /= np.linalg.norm(p)
+    return np.array([p, np.cross(a, p)])

@@ -330,6 +330,8 @@ def _check(problem, load_steps: int, tol: float, max_iter: int) -> None:
     if not np.any(problem.fix_position):
         raise ValueError("static needs a support: bc.start or bc.end clamped or hinged (a free beam has no "
                          "equilibrium under loads)")
+    if getattr(problem, "hinges", ()):
+        raise ValueError('static: hinge joints ([[joints]] kind = "hinge") are not supported; use the dynamics')
     if problem.moving_ends or problem.translating_ends:
         raise ValueError("static: a prescribed support motion (motion.*, translation.*) is not a static load")
     if not (isinstance(load_steps, (int, np.integer)) and load_steps >= 1):

@@ -7,8 +7,9 @@ Same mathematics as the NumPy path of :mod:`..galerkin`, one loop over the point
   ``R <- R exp(hat(Theta))``, ``K <- exp(-Theta) K + J_r(Theta) Theta_s``; ``c, v, w`` plus
   their increments.
 * :func:`rates`: strains, resultants, the weak-form forces and the projected
-  ``dexpinv`` scattered onto the control values in the same loop, end loads, then the
-  banded Cholesky solves with the supported rows prescribed and the joints' constraints;
+  ``dexpinv`` scattered onto the control values in the same loop, end loads and hinge
+  springs, then the banded Cholesky solves with the supported rows prescribed and the
+  joints' constraints (the hinges' rebuilt from the state at every stage);
   returns the power of the loads and supports minus the dissipation.
 
 The data: :class:`GalerkinData`, packed by :func:`.adapters.pack`. ``loads`` holds the
@@ -90,11 +91,19 @@ class GalerkinData(NamedTuple):
     joint_ab: np.ndarray  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
     joint_q: np.ndarray
     Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
-    Sinv: np.ndarray  # (3, 3 J, 3 J); a ball joint's rows are 0 in Y[1:], Sinv[1:] (lam = 0)
+    Sinv: np.ndarray  # (3, 3 J, 3 J) S^-1 D: ball joints and hinges are 0 in Y[1:], Sinv[1:] (lam = 0)
     keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
     jr: np.ndarray  # (3 J,) work
     body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
     body_J: np.ndarray
+    hinge_ab: np.ndarray  # (H, 4) hinges: rows a, b and points of a, b
+    hinge_E: np.ndarray  # (H, 2, 3) rows perpendicular to the material axis at b
+    hinge_Z: np.ndarray  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
+    hinge_C: np.ndarray  # (2 H, 2, 3) work: constraint rows on rows a, b
+    hinge_S: np.ndarray  # (2 H, 2 H + 1) work: capacitance and right-hand side
+    hinge_axis: np.ndarray  # (H, 3) material axis at b, Q = R0_a^T R0_b (H, 3, 3), stiffness and damping (H, 2)
+    hinge_Q: np.ndarray
+    hinge_kc: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -109,7 +118,8 @@ def unpack(flat, head):
         i1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27), i1(flat, head, 28),
         i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), i2(flat, head, 32), f3(flat, head, 33),
         f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37), i1(flat, head, 38),
-        f2(flat, head, 39))
+        f2(flat, head, 39), i2(flat, head, 40), f3(flat, head, 41), f3(flat, head, 42), f3(flat, head, 43),
+        f2(flat, head, 44), f2(flat, head, 45), f3(flat, head, 46), f2(flat, head, 47))
 
 
 # ====================================================================== action
@@ -237,7 +247,110 @@ def _constrain(x, jab, jq, Y, Sinv, rotational, r):
 
 
 @njit(cache=True, fastmath=False, inline="always")
-def _solve(d, w, out):
+def _hinge_springs(d, R, w, out):
+    """The hinges' spring-damper couples ``m = k phi + c dphi/dt`` into ``out[3]`` (``-m
+    axis`` on row b, ``m G axis`` on row a); their power (``-c dphi/dt^2``)
+    (:meth:`GalerkinBeamProblem._hinge_springs`)."""
+    power = 0.0
+    for h in range(d.hinge_ab.shape[0]):
+        k, c = d.hinge_kc[h, 0], d.hinge_kc[h, 1]
+        if k == 0.0 and c == 0.0:
+            continue
+        a, b, pa, pb = d.hinge_ab[h, 0], d.hinge_ab[h, 1], d.hinge_ab[h, 2], d.hinge_ab[h, 3]
+        e0 = (d.hinge_E[h, 0, 0], d.hinge_E[h, 0, 1], d.hinge_E[h, 0, 2])
+        e1 = (d.hinge_E[h, 1, 0], d.hinge_E[h, 1, 1], d.hinge_E[h, 1, 2])
+        ax = row(d.hinge_axis, h)
+        He = rot_T(d.hinge_Q, h, rot_T(R, pa, rot(R, pb, e0)))
+        phi = np.arctan2(dot(e1, He), dot(e0, He))
+        rate = dot(ax, sub(row(w, b), rot_T(R, pb, rot(R, pa, row(w, a)))))
+        m = k * phi + c * rate
+        put(out[3], b, axpy(-m, ax, row(out[3], b)))
+        put(out[3], a, axpy(m, rot_T(R, pa, rot(R, pb, ax)), row(out[3], a)))
+        power -= c * rate * rate
+    return power
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _hinge_rows(d, R, w, u1, field):
+    """The hinges' constraint rows on one rotational field (0: Theta', 1: W) into
+    ``hinge_C`` and their right-hand sides into the last column of ``hinge_S``: W:
+    ``E (W_b - G^T W_a) = -E (W_b x G^T W_a)``; Theta': ``E (A_b Theta'_b - G^T A_a Theta'_a)
+    = 0`` with ``G = R_a^T R_b``, ``A = dexp_{-Theta}`` (:meth:`GalerkinBeamProblem._hinge_rows`)."""
+    m = d.hinge_S.shape[0]
+    for h in range(d.hinge_ab.shape[0]):
+        a, b, pa, pb = d.hinge_ab[h, 0], d.hinge_ab[h, 1], d.hinge_ab[h, 2], d.hinge_ab[h, 3]
+        ta, tb = row(u1, a), row(u1, b)
+        _, Ba, Ca = coef_ABC(norm(ta), d.ser, d.thr)
+        _, Bb, Cb = coef_ABC(norm(tb), d.ser, d.thr)
+        for k in range(2):
+            e = (d.hinge_E[h, k, 0], d.hinge_E[h, k, 1], d.hinge_E[h, k, 2])
+            Ge = rot_T(R, pa, rot(R, pb, e))
+            g = 0.0
+            if field == 1:
+                cb, ca = e, neg(Ge)
+                g = -dot(e, cross(row(w, b), rot_T(R, pb, rot(R, pa, row(w, a)))))
+            else:  # A^T = J_l(Theta) = J_r(-Theta)
+                cb, ca = jr_times(Bb, Cb, neg(tb), e), neg(jr_times(Ba, Ca, neg(ta), Ge))
+            put(d.hinge_C[2 * h + k], 0, ca)
+            put(d.hinge_C[2 * h + k], 1, cb)
+            d.hinge_S[2 * h + k, m] = g
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _hinge_apply(d, l, x):
+    """``C_l x`` of hinge row ``l`` (``hinge_C``) on a field ``x`` ``(n, 3)``."""
+    h = l // 2
+    a, b = d.hinge_ab[h, 0], d.hinge_ab[h, 1]
+    return dot(row(d.hinge_C[l], 0), row(x, a)) + dot(row(d.hinge_C[l], 1), row(x, b))
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def _constrain_hinges(x, d, R, w, u1, field):
+    """``x <- x - Y S^-1 (C x - g)`` for the hinges on one rotational field, ``Y = M_c^-1
+    C^T`` from the constrained responses ``hinge_Z`` (the constant joints kept)."""
+    m = d.hinge_S.shape[0]
+    if m == 0:
+        return
+    _hinge_rows(d, R, w, u1, field)
+    Z, C, S = d.hinge_Z, d.hinge_C, d.hinge_S
+    for k in range(m):
+        S[k, m] = _hinge_apply(d, k, x) - S[k, m]
+        for l in range(m):
+            s = 0.0
+            for e in range(2):
+                for c in range(3):
+                    if C[l, e, c] != 0.0:
+                        s += C[l, e, c] * _hinge_apply(d, k, Z[((l // 2 * 2 + field) * 2 + e) * 3 + c])
+            S[k, l] = s
+    for i in range(m):  # Gaussian elimination with partial pivoting; lambda into S[:, m]
+        p = i
+        for k in range(i + 1, m):
+            if abs(S[k, i]) > abs(S[p, i]):
+                p = k
+        for q in range(m + 1):
+            S[i, q], S[p, q] = S[p, q], S[i, q]
+        for k in range(i + 1, m):
+            f = S[k, i] / S[i, i]
+            for q in range(i, m + 1):
+                S[k, q] -= f * S[i, q]
+    for i in range(m - 1, -1, -1):
+        s = S[i, m]
+        for q in range(i + 1, m):
+            s -= S[i, q] * S[q, m]
+        S[i, m] = s / S[i, i]
+    for l in range(m):
+        for e in range(2):
+            for c in range(3):
+                f = S[l, m] * C[l, e, c]
+                if f != 0.0:
+                    zi = ((l // 2 * 2 + field) * 2 + e) * 3 + c
+                    for i in range(x.shape[0]):
+                        for q in range(3):
+                            x[i, q] -= f * Z[zi, i, q]
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def _solve(d, w, out, R, u1):
     """Supported rows' forces into ``keep``, prescribed values, then the three mass solves
     (nine columns in one sweep) with the joints' constraints."""
     keep, fp, fr = d.keep, d.fp, d.fr
@@ -257,6 +370,8 @@ def _solve(d, w, out):
     _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
     _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
     _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
+    _constrain_hinges(out[1], d, R, w, u1, 0)
+    _constrain_hinges(out[3], d, R, w, u1, 1)
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -314,7 +429,8 @@ def rates(c, v, w, R, K, u, out, d):
         wr = row(w, r)
         Jw = (d.body_J[k, 0] * wr[0], d.body_J[k, 1] * wr[1], d.body_J[k, 2] * wr[2])
         put(o3, r, sub(row(o3, r), cross(wr, Jw)))
-    _solve(d, w, out)
+    power += _hinge_springs(d, R, w, out)
+    _solve(d, w, out, R, u1)
     if not d.power:
         return 0.0
     return power + _support_power(d, v, w, out)
@@ -398,7 +514,20 @@ def _joint_data(pb) -> dict:
             "joint_q": np.array([j[3] for j in pb.joints], dtype=float).reshape(nj, 3, 3),
             "Y": c64(Y), "Sinv": c64(Sinv), "keep": np.zeros((10, 3)), "jr": np.zeros(3 * nj),
             "body_row": np.array([r for r, _, _ in pb.bodies], dtype=np.int64),
-            "body_J": c64(np.array([b.inertia for _, _, b in pb.bodies], dtype=float).reshape(-1, 3))}
+            "body_J": c64(np.array([b.inertia for _, _, b in pb.bodies], dtype=float).reshape(-1, 3)),
+            **_hinge_data(pb)}
+
+
+def _hinge_data(pb) -> dict:
+    """The hinges' fields of :class:`GalerkinData`."""
+    hs, n = pb.hinges, pb.n
+    Z = np.array([[h.Z[f] for f in ("theta", "rotation")] for h in hs], dtype=float).reshape(12 * len(hs), n, 3)
+    return {"hinge_ab": np.array([(h.a, h.b, h.point, h.point_b) for h in hs], dtype=np.int64).reshape(len(hs), 4),
+            "hinge_E": c64(np.array([h.E for h in hs], dtype=float).reshape(len(hs), 2, 3)), "hinge_Z": c64(Z),
+            "hinge_C": np.zeros((2 * len(hs), 2, 3)), "hinge_S": np.zeros((2 * len(hs), 2 * len(hs) + 1)),
+            "hinge_axis": c64(np.array([h.axis for h in hs], dtype=float).reshape(len(hs), 3)),
+            "hinge_Q": c64(np.array([h.Q for h in hs], dtype=float).reshape(len(hs), 3, 3)),
+            "hinge_kc": c64(np.array([(h.stiffness, h.damping) for h in hs], dtype=float).reshape(len(hs), 2))}
 
 
 def galerkin_data(pb):
