@@ -220,3 +220,25 @@ def test_static_command_writes_the_load_path_and_balanced_reactions(tmp_path):
     assert np.max(np.abs(np.array(r["force"]) + force)) < 1e-7 * 100.0
     assert np.max(np.abs(np.array(r["couple"]) + np.cross(s["tip"], force))) < 1e-7 * 100.0
     assert rows[-1, 4:] == pytest.approx(s["tip"], abs=1e-15)
+
+
+def test_the_static_solution_is_the_mean_of_the_dynamic_response(tmp_path):
+    """A thick cantilever (t = 0.1 m) under a suddenly applied tip force of 1 kN oscillates
+    about its static equilibrium: the time average of the undamped tip over 8 periods of the
+    first mode (83.27 Hz) equals the static tip. The higher modes average out as one over
+    their frequency times the span (measured: 1.4e-4 relative over 4 periods, 8.3e-5 over
+    8), asserted 3e-4."""
+    from liegroup_int.integrators import modal_analysis
+    from liegroup_int.io import read_history
+    from liegroup_int.runner import run_scene
+    from liegroup_int.scenes import KINDS
+
+    over = {"section.t": 0.1, "loads.end.force": [0.0, 0.0, -1000.0], "space.n_ctrl": 21, "integrator.dt": "auto",
+            "output.plots": False, "output.hdf5": False}
+    sim = KINDS["beam"].build(load_scene("cantilever", over))
+    period = 1.0 / modal_analysis(sim.problem, 0.0, sim.y0, 2).modes[0].freq_hz
+    z_static = sim.problem.tip(solve_static(sim.problem, load_steps=1).state)[2]
+    run_scene(load_scene("cantilever", {**over, "t_end": 8 * period, "output.every": period / 400}), tmp_path)
+    h = read_history(tmp_path / "history.csv")
+    mean = np.trapezoid(h["tip_z"], h["t"]) / h["t"][-1]
+    assert abs(mean / z_static - 1.0) < 3e-4
