@@ -301,7 +301,8 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
         Key("events", "tables", (), "[[events]] entries: quantity (a history column of a recorded quantity, e.g. "
             "tip_z), value (default 0), direction (falling, rising, both), terminal (stop the run at the first), "
-            "name; each crossing is located on the dense output of the step it falls in and listed in summary.json"),
+            "name; the column is compared at output times and each crossing located on the dense output of the step "
+            "it falls in, listed in summary.json"),
         Key("guard.dt", "bool", True, "refuse a fixed dt beyond the stable step of the discretization at the start"),
         Key("guard.spectrum", "bool", True,
             "refuse a discretization with a growing linearized mode at rest (dense spectrum at the start; "
