@@ -12,7 +12,7 @@ from liegroup_int.cli import main
 from liegroup_int.scenes import SceneError, load_scene
 from liegroup_int.scenes.beam import problem
 
-from test_scenes_joints import TWO, _random_state, _run
+from test_scenes_joints import TWO, _backends_agree, _random_state, _run
 
 #: a tip force in the bending plane (y) and out of it (z): the hinge turns and bends
 SKEW = {"loads.end.force": [0.0, 50.0, 50.0], "loads.end.couple": [0.0, 0.0, 0.0]}
@@ -117,12 +117,7 @@ def test_backends_agree_on_the_hinge_rates():
     from liegroup_int.groups.so3 import left_jacobian
 
     pbs = [_two(axis=(0.0, 1.0, 2.0), backend=b, spring=(3.0, 0.5), **SKEW) for b in ("numpy", "numba")]
-    y, u = _random_state(pbs[0])
-    rates = [pb.increment_rate(0.3, y, u) for pb in pbs]
-    scale = np.max(np.abs(rates[0]))
-    assert np.max(np.abs(rates[0] - rates[1])) <= 1e-12 * scale
-    pbs[1]._nb.increment_rate(0.3, y, np.zeros_like(u))
-    assert float(pbs[1]._nb._pw[0]) == pytest.approx(pbs[0].quadrature_rate(0.3, y), rel=1e-12)
+    y, u, rates, scale = _backends_agree(pbs)
     h = pbs[0].hinges[0]
     G = y.R[h.point].T @ y.R[h.point_b]
     r = rates[0]

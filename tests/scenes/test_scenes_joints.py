@@ -48,6 +48,18 @@ def _run(pb, t_end, dt, n_out=11):
     return out
 
 
+def _backends_agree(pbs):
+    """Stage rates and load power of the NumPy and numba problems ``pbs`` at a random state,
+    equal to 1e-12 relative; ``(y, u, rates, scale)``."""
+    y, u = _random_state(pbs[0])
+    rates = [pb.increment_rate(0.3, y, u) for pb in pbs]
+    scale = np.max(np.abs(rates[0]))
+    assert np.max(np.abs(rates[0] - rates[1])) <= 1e-12 * scale
+    pbs[1]._nb.increment_rate(0.3, y, np.zeros_like(u))
+    assert float(pbs[1]._nb._pw[0]) == pytest.approx(pbs[0].quadrature_rate(0.3, y), rel=1e-12)
+    return y, u, rates, scale
+
+
 def _random_state(pb, seed=1):
     """A deformed moving state that satisfies the joints (positions ~5e-3 m, rotations and
     velocities ~5e-2)."""
@@ -95,12 +107,7 @@ def test_backends_agree_on_the_stage_rates(kind, scene_over):
         pbs = [problem(load_scene("t_frame", {**over, "integrator.backend": b})) for b in ("numpy", "numba")]
     else:
         pbs = [_pb(kind=kind, backend=b) for b in ("numpy", "numba")]
-    y, u = _random_state(pbs[0])
-    rates = [pb.increment_rate(0.3, y, u) for pb in pbs]
-    scale = np.max(np.abs(rates[0]))
-    assert np.max(np.abs(rates[0] - rates[1])) <= 1e-12 * scale
-    pbs[1]._nb.increment_rate(0.3, y, np.zeros_like(u))
-    assert float(pbs[1]._nb._pw[0]) == pytest.approx(pbs[0].quadrature_rate(0.3, y), rel=1e-12)
+    y, u, rates, scale = _backends_agree(pbs)
     for j in pbs[0].joints:
         assert np.allclose(rates[0][[0, 2], j.b], rates[0][[0, 2], j.a], rtol=0, atol=1e-12 * scale)
         turn = np.max(np.abs(rates[0][[1, 3], j.b] - rates[0][[1, 3], j.a] @ j.Q))
