@@ -12,7 +12,7 @@ from liegroup_int.cli import main
 from liegroup_int.scenes import SceneError, load_scene
 from liegroup_int.scenes.beam import problem
 
-from test_scenes_joints import TWO, _backends_agree, _random_state, _run
+from test_scenes_joints import TWO, _backends_agree, _run
 
 #: a tip force in the bending plane (y) and out of it (z): the hinge turns and bends
 SKEW = {"loads.end.force": [0.0, 50.0, 50.0], "loads.end.couple": [0.0, 0.0, 0.0]}
