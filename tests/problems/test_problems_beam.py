@@ -7,10 +7,11 @@ from liegroup_int import SO3
 from liegroup_int.integrators import integrate_fixed, resolve_method
 from liegroup_int.integrators.spectrum import eigenvalues
 from liegroup_int.problems.beam import BeamState, curvature_update
-from liegroup_int.scenes import SceneError, load_scene
+from liegroup_int.scenes import SceneError, builtin_names, load_scene
 from liegroup_int.scenes.beam import problem
 
-BEAM_SCENES = ["pendulum", "cantilever", "arch", "spinning_helix", "flying_spaghetti"]
+#: every built-in beam scene, from the registry (a new scene is covered without editing this file)
+BEAM_SCENES = [n for n in builtin_names() if load_scene(n).kind == "beam"]
 
 
 # ---------------------------------------------------------------- curvature update
