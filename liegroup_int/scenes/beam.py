@@ -260,7 +260,8 @@ JOINT_KEYS = {
 }
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
-    "at": Key("at", "str", "end", "the end the body is fixed to", choices=("start", "end")),
+    "at": Key("at", "str", "end", "the end the body is fixed to: \"start\" or \"end\" of the beam (or chain), or "
+              "\"<member>.start\" / \"<member>.end\" of a named [[beams]] member (a frame's joint included)"),
     "mass": Key("mass", "float", 0.0, "mass", "kg", non_negative),
     "inertia": Key("inertia", "vec3", ZERO, "principal moments of inertia about the end point, along the end "
                    "section's d1, d2, d3", "kg m^2"),
@@ -419,6 +420,7 @@ def frame_space(scene: Scene):
         space = PatchedSpace(frame["spaces"], **graph)
     except ValueError as exc:
         raise SceneError(f"{scene.source}: key '{'joints' if graph else 'beams'}': {exc}") from None
+    space.members = tuple(frame["members"])  # the [[beams]] entry of each patch (bodies at member ends)
     sections = frame["sections"]
     if any(sec is not None for sec in sections):
         shared = constants(scene) if any(sec is None for sec in sections) else None
@@ -633,7 +635,7 @@ def _undamped(scene: Scene) -> BeamProblem:
     ic = InitialConditions(scene["initial.velocity"], scene["initial.omega"], scene["initial.axis_point"])
     kv = scene["material.kelvin_voigt"]
     section = sections if sections is not None else constants(scene)  # one-line errors, named by key
-    bodies = _bodies(scene)
+    bodies = _bodies(scene, space)
     if bodies and scene["space.formulation"] != "galerkin":
         raise SceneError(f"{scene.source}: key 'bodies': end bodies need space.formulation = \"galerkin\"")
     try:
@@ -811,7 +813,23 @@ def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
     return {"dt_auto": step.dt, "lambda_max": lam, "lambda_dt": step.y, "dt_rule": step.rule}
 
 
-def _bodies(scene: Scene) -> tuple:
+def _body_end(scene: Scene, where: str, at: str, space) -> tuple[str, int]:
+    """``(side, patch)`` of a body's ``at``: the beam's own end (patch -1) or a member's."""
+    if at in ("start", "end"):
+        return at, -1
+    name, _, side = at.rpartition(".")
+    if side not in ("start", "end") or not name:
+        raise SceneError(f"{where}: key 'at' = {at!r}: expected \"start\", \"end\" or \"<member>.start\" / "
+                         "\"<member>.end\"")
+    names = [str(flatten(e).get("name", "")) for e in scene["beams"]]
+    if name not in names:
+        raise SceneError(f"{where}: key 'at' = {at!r}: no [[beams]] entry named {name!r}"
+                         + (f" (members: {', '.join(n for n in names if n)})" if any(names) else ""))
+    pieces = [k for k, m in enumerate(getattr(space, "members", ())) if m == names.index(name)]
+    return side, (pieces[0] if side == "start" else pieces[-1]) if pieces else names.index(name)
+
+
+def _bodies(scene: Scene, space=None) -> tuple:
     """The scene's ``[[bodies]]`` as :class:`EndBody` objects (one-line errors)."""
     out = []
     for i, entry in enumerate(scene["bodies"]):
@@ -820,8 +838,9 @@ def _bodies(scene: Scene) -> tuple:
         if np.any(v["offset"]):
             raise SceneError(f"{where}: key 'offset' = {list(v['offset'])}: a body off the end point is not "
                              "supported; give its inertia about the end point (parallel-axis theorem)")
+        side, patch = _body_end(scene, where, v["at"], space)
         try:
-            out.append(EndBody(at=v["at"], mass=v["mass"], inertia=tuple(v["inertia"])))
+            out.append(EndBody(at=side, mass=v["mass"], inertia=tuple(v["inertia"]), patch=patch))
         except ParameterError as exc:
             raise SceneError(f"{where}: key '{exc.field}': {exc.reason}") from None
     return tuple(out)

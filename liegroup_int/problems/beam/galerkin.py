@@ -223,16 +223,27 @@ class GalerkinBeamProblem(BeamBase):
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
         """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
         and their weight the load vector."""
-        out = []
+        out, seen = [], set()
         for b in bodies:
-            if any(b.at == o.at for _, _, o in out):
-                raise ValueError(f"bodies: two bodies at the {b.at}; combine them into one")
-            row, point = (0, 0) if b.at == "start" else (self.n - 1, self.m - 1)
+            row, point = self._body_place(b)
+            if row in seen:
+                raise ValueError(f"bodies: two bodies at the {b.at}" + (f" of patch {b.patch}" if b.patch >= 0 else "")
+                                 + "; combine them into one")
+            seen.add(row)
             self.mass_weights[row] += b.mass
             self.load_vector[row] += b.mass * g
             self.has_q = self.has_q or bool(b.mass and np.any(g))
             out.append((row, point, b))
         return tuple(out)
+
+    def _body_place(self, b) -> tuple[int, int]:
+        """Control row and point of a body's end."""
+        if b.patch < 0:
+            return (0, 0) if b.at == "start" else (self.n - 1, self.m - 1)
+        if not hasattr(self.space, "end_row") or b.patch >= len(self.gs.patch_ends):
+            raise ValueError(f"bodies: patch {b.patch}: the space has {len(self.gs.patch_ends)} patch(es)")
+        ends = self.gs.patch_ends[b.patch]
+        return self.space.end_row(b.patch, b.at), ends[0] if b.at == "start" else ends[1]
 
     @staticmethod
     def _sections(space, constants) -> tuple:

@@ -254,16 +254,20 @@ class EndBody:
     Parameters
     ----------
     at : {"start", "end"}
-        The end it is fixed to.
+        The end it is fixed to: of the beam, or of patch ``patch`` of a frame.
     mass : float
         Mass [kg] (>= 0).
     inertia : (3,) tuple
         Principal moments of inertia about the end point, along ``d1, d2, d3`` [kg m^2] (>= 0).
+    patch : int
+        A frame's patch (member piece) whose end it is; -1: the end of the whole beam or
+        chain.
     """
 
     at: str = "end"
     mass: float = 0.0
     inertia: tuple = (0.0, 0.0, 0.0)
+    patch: int = -1
 
     def __post_init__(self):
         if self.at not in ("start", "end"):
