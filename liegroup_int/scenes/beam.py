@@ -257,6 +257,12 @@ JOINT_KEYS = {
                      "relative rotation angle (|phi| < pi; kind = \"hinge\" only)", "N m/rad", non_negative),
     "damping": Key("damping", "float", 0.0, "rotational damper about the hinge axis: couple c dphi/dt "
                    "(kind = \"hinge\" only)", "N m s/rad", non_negative),
+    "force": Key("force", "vec3", ZERO, "force at the joint (spatial, dead load, on its first end)", "N"),
+    "couple": Key("couple", "vec3", ZERO, "couple at the joint (spatial, dead load, on its first end)", "N m"),
+    "profile": Key("profile", "str", "constant", "time profile of the joint's force and couple", choices=PROFILE_KINDS),
+    "t_on": Key("t_on", "float", 0.0, "profile switch-on time", "s", non_negative),
+    "t_off": Key("t_off", "float", float("inf"), "profile switch-off time", "s", positive),
+    "ramp": Key("ramp", "float", 1.0, "ramp duration", "s", positive),
 }
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
@@ -477,8 +483,19 @@ def _graph(scene: Scene, frame: dict) -> tuple:
         kinds += [v["kind"]] * (len(ends) - 1)
         axes += [_hinge_axis(where, v)] * (len(ends) - 1)
         springs += [(v["stiffness"], v["damping"])] * (len(ends) - 1)
-        loads += [None] * (len(ends) - 1)
+        loads += [_joint_load(where, v)] + [None] * (len(ends) - 2)
     return pairs, kinds, axes, springs, loads
+
+
+def _joint_load(where: str, v: dict):
+    """The dead force and couple of a ``[[joints]]`` entry (on its first pair), or None."""
+    if not (np.any(v["force"]) or np.any(v["couple"])):
+        return None
+    try:
+        prof = Profile(kind=v["profile"], t_on=v["t_on"], t_off=v["t_off"], ramp=v["ramp"])
+    except ParameterError as exc:
+        raise SceneError(f"{where}: key '{exc.field}': {exc.reason}") from None
+    return EndLoad(force=v["force"], couple=v["couple"], force_profile=prof, couple_profile=prof)
 
 
 def _hinge_axis(where: str, v: dict):

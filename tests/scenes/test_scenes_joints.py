@@ -310,3 +310,25 @@ def test_joint_reactions_are_recorded_per_joint(tmp_path):
     assert np.max(np.abs(want)) > 0.1  # the tip force passes through the joint
     with pytest.raises(SceneError, match="'joint_reactions' needs a frame's joints"):
         load_scene("cantilever", {"output.quantities": ["joint_reactions"]})
+
+
+def test_a_load_at_a_joint_is_carried_to_the_support(tmp_path):
+    """A dead force at the T-frame's joint ([[joints]] force) with the arm's tip force off:
+    in static equilibrium the post's clamp takes it all, force to the Newton tolerance
+    (1e-8 of the load; measured below 1e-9) and the couple r x F of the joint's deformed
+    position."""
+    import json
+
+    force = [3.0, 0.0, -20.0]
+    joint = {"ends": ["post.end", "left.start", "right.start"], "force": force}
+    out = tmp_path / "st"
+    assert main(["static", "t_frame", "--set", f"joints=[{{ends={joint['ends']!r}, force={force!r}}}]".replace("'", '"'),
+                 "--set", "loads.end.force=[0,0,0]", "--out", str(out), "--quiet"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    (name, r), = s["reactions"].items()
+    assert np.max(np.abs(np.array(r["force"]) + force)) < 1e-7 * 20.0
+    sim_pb = problem(load_scene("t_frame", {"joints": [joint], "loads.end.force": [0.0, 0.0, 0.0]}))
+    assert len(sim_pb.point_loads) == 1 and sim_pb.point_loads[0][0] == sim_pb.joints[0].a
+    x = np.load(out / "state.npz")["c"][sim_pb.joints[0].a]  # the joint at equilibrium
+    base = sim_pb.space.patches[0].c0[0]  # the clamp at the post's start
+    assert np.max(np.abs(np.array(r["couple"]) + np.cross(x - base, force))) < 1e-7 * 20.0
