@@ -247,6 +247,13 @@ BEAM_KEYS = {
     "n_ctrl": Key("n_ctrl", "int", 0, "control points of this patch (0: space.n_ctrl)", "", lambda v: None if v >= 0 else
                   "an integer >= 0"),
 }
+#: The time-profile keys of a load entry ([[point_loads]], [[joints]]).
+PROFILE_KEYS = {
+    "profile": Key("profile", "str", "constant", "time profile of the force and couple", choices=PROFILE_KINDS),
+    "t_on": Key("t_on", "float", 0.0, "profile switch-on time", "s", non_negative),
+    "t_off": Key("t_off", "float", float("inf"), "profile switch-off time", "s", positive),
+    "ramp": Key("ramp", "float", 1.0, "ramp duration", "s", positive),
+}
 #: Keys of one ``[[joints]]`` entry.
 JOINT_KEYS = {
     "ends": Key("ends", "strs", (), "the joined member ends, \"<name>.start\" or \"<name>.end\" (two or more)"),
@@ -259,10 +266,7 @@ JOINT_KEYS = {
                    "(kind = \"hinge\" only)", "N m s/rad", non_negative),
     "force": Key("force", "vec3", ZERO, "force at the joint (spatial, dead load, on its first end)", "N"),
     "couple": Key("couple", "vec3", ZERO, "couple at the joint (spatial, dead load, on its first end)", "N m"),
-    "profile": Key("profile", "str", "constant", "time profile of the joint's force and couple", choices=PROFILE_KINDS),
-    "t_on": Key("t_on", "float", 0.0, "profile switch-on time", "s", non_negative),
-    "t_off": Key("t_off", "float", float("inf"), "profile switch-off time", "s", positive),
-    "ramp": Key("ramp", "float", 1.0, "ramp duration", "s", positive),
+    **PROFILE_KEYS,
 }
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
@@ -279,10 +283,7 @@ POINT_LOAD_KEYS = {
              lambda v: None if 0.0 < v < 1.0 else "a fraction in (0, 1) (use loads.start / loads.end at the ends)"),
     "force": Key("force", "vec3", ZERO, "force (spatial, dead load)", "N"),
     "couple": Key("couple", "vec3", ZERO, "couple (spatial, dead load)", "N m"),
-    "profile": Key("profile", "str", "constant", "time profile", choices=PROFILE_KINDS),
-    "t_on": Key("t_on", "float", 0.0, "profile switch-on time", "s", non_negative),
-    "t_off": Key("t_off", "float", float("inf"), "profile switch-off time", "s", positive),
-    "ramp": Key("ramp", "float", 1.0, "ramp duration", "s", positive),
+    **PROFILE_KEYS,
     "table": Key("table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
 }
 
