@@ -88,7 +88,7 @@ def _patch_points(space: CollocationSpace, rule: str) -> dict:
     c_u = space.curve.evaluate(u, 1)[1]
     t = c_u / np.linalg.norm(c_u, axis=1)[:, None]
     um, wm = exact_mass_rule(space)
-    return {"u": u, "B0": basis[0], "B1": basis[1], "w_full": wb, "w_axial": wa, "R0": R0, "K0": K0,
+    return {"rule": r.name, "u": u, "B0": basis[0], "B1": basis[1], "w_full": wb, "w_axial": wa, "R0": R0, "K0": K0,
             "gamma0": np.einsum("nji,nj->ni", R0, t), "s": space.arc_length(u),
             "mass_basis": space.basis_s(um)[0], "mass_weights": wm}
 
@@ -165,6 +165,8 @@ class GalerkinSpace:
                 d["u"] = edges[k] + (edges[k + 1] - edges[k]) * d["u"]
                 d["s"] = s_edges[k] + d["s"]
         cat = {k: np.concatenate([d[k] for d in parts]) for k in ("u", "w_full", "w_axial", "R0", "K0", "gamma0", "s")}
+        #: the rule each patch used (``"auto"`` resolved)
+        self.rules_used = tuple(d["rule"] for d in parts)
         self.u = _frozen(cat["u"])
         self.B0 = _frozen(_block_diag([d["B0"] for d in parts]))
         self.B1 = _frozen(_block_diag([d["B1"] for d in parts]))

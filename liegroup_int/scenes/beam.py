@@ -95,9 +95,11 @@ KEYS = {
             "growing mode), the paper's primal collocation (primal), or the locking-free mixed collocation "
             "(resultant splines)",
             choices=("primal", "mixed", "galerkin")),
-        Key("space.quadrature", "str", "gauss-p",
-            "quadrature rule of the galerkin stiffness (gauss-p: p Gauss points per knot interval for every term, "
-            "the straight beam's stiffness at rest exactly; gauss: p + 1 for bending, p for axial and shear)",
+        Key("space.quadrature", "str", "auto",
+            "quadrature rule of the galerkin stiffness (auto: gauss-spline for p >= 3 where it is found, p = 3..6 "
+            "always, else gauss-p; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
+            "(p + 1) / 2 points per knot interval; gauss-p: p Gauss points per knot interval; both integrate the "
+            "straight beam's stiffness at rest exactly)",
             choices=tuple(RULES)),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),
@@ -884,6 +886,13 @@ def _static_start(scene: Scene, pb: BeamProblem) -> tuple:
                                           "residual": res.residuals[-1][-1]}}
 
 
+def _quadrature_used(pb) -> dict:
+    """The Galerkin stiffness rule as run (``"auto"`` resolved per member) and its point count."""
+    used = sorted(set(pb.gs.rules_used))
+    return {"rule": pb.quadrature, "used": used[0] if len(used) == 1 else used,
+            "points": int(np.count_nonzero(pb.gs.w_full + pb.gs.w_axial))}
+
+
 def build(scene: Scene) -> Simulation:
     pb = problem(scene, size_damping=True)
     y0, static = (pb.initial_state(), {}) if scene["initial.state"] == "reference" else _static_start(scene, pb)
@@ -902,7 +911,8 @@ def build(scene: Scene) -> Simulation:
         "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
                            "n_ctrl": scene["space.n_ctrl"],
                            "length": pb.space.length,
-                           **({} if pb.formulation == "galerkin" else {"C_star": 4.0}),
+                           **({"quadrature": _quadrature_used(pb)} if pb.formulation == "galerkin"
+                              else {"C_star": 4.0}),
                            "kelvin_voigt": pb.tau},
         **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
         **({"kelvin_voigt_auto": f"0 ({GALERKIN_CLEAN})"}

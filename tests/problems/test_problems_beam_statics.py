@@ -20,10 +20,11 @@ from liegroup_int.scenes.beam import problem
 EI_ROLLUP = 1e7 * np.pi * 0.05**4 / 64
 
 
-def _rollup(f: float, n: int, p: int = 3):
+def _rollup(f: float, n: int, p: int = 3, rule: str = "auto"):
     """Roll-up cantilever (L = 1) under the end couple ``f 2 pi EI / L``; its profile is
     evaluated at t = 12 s, where the built-in scene's ramp has ended."""
     return problem(load_scene("rollup", {"integrator.backend": "numpy", "space.n_ctrl": n, "space.degree": p,
+                                         "space.quadrature": rule,
                                          "loads.end.couple": [0.0, 0.0, f * 2 * np.pi * EI_ROLLUP]}))
 
 
@@ -60,20 +61,23 @@ def test_rollup_matches_the_circle(f):
     assert np.linalg.norm(pb.tip(res.state) - _circle_tip(f)) < 1e-5
 
 
+@pytest.mark.parametrize("rule,low,high", [("gauss-p", 5.5, 7.0), ("gauss-spline", 5.5, 9.0)])
 @pytest.mark.parametrize("f", [0.25, 0.5])
-def test_rollup_error_falls_at_twice_the_degree(f):
+def test_rollup_error_falls_at_twice_the_degree(f, rule, low, high):
     """Tip error against the exact circle at p = 3 on 9, 13 and 21 knot intervals
-    (n_ctrl = 12, 16, 24): the fitted log-log slope against the interval length is 2p = 6
-    (the end value of a Galerkin solution superconverges); measured 6.0 and 6.2, asserted
-    within [5.5, 7]. The reference is exact, so no reference error enters the fit."""
+    (n_ctrl = 12, 16, 24): the fitted log-log slope against the interval length is at
+    least 2p = 6 (the end value of a Galerkin solution superconverges). gauss-p: measured
+    6.0 and 6.2, asserted within [5.5, 7]; gauss-spline (the default): measured 7.7 and
+    7.9 (errors 1.8e-7 to 2.6e-10 at f = 0.25), asserted within [5.5, 9]. The reference
+    is exact, so no reference error enters the fit."""
     ns = np.array([12, 16, 24])
     errs = []
     for n in ns:
-        pb = _rollup(f, int(n))
+        pb = _rollup(f, int(n), rule=rule)
         res = solve_static(pb, load_steps=max(1, int(4 * f)), t=12.0)
         errs.append(np.linalg.norm(pb.tip(res.state) - _circle_tip(f)))
     slope = np.polyfit(np.log(1.0 / (ns - 3)), np.log(errs), 1)[0]
-    assert 5.5 <= slope <= 7.0, (errs, slope)
+    assert low <= slope <= high, (errs, slope)
 
 
 @pytest.mark.parametrize("P", [1.0, 0.1])
@@ -192,7 +196,7 @@ def test_a_run_started_from_the_static_equilibrium_stays_there(tmp_path):
 @pytest.mark.parametrize("over, match", [
     ({"initial.state": "static", "bc.start": "hinged", "initial.omega": [0.0, 0.0, 1.0]}, "starts at rest"),
     ({"initial.state": "static", "space.formulation": "primal"}, 'static needs space.formulation = "galerkin"'),
-    ({"initial.state": "static", "initial.static_steps": 1, "loads.end.force": [0.0, 0.0, -1e5]},
+    ({"initial.state": "static", "initial.static_steps": 1, "loads.end.force": [0.0, 0.0, -1e6]},
      "no equilibrium at load factor 1"),
 ])
 def test_static_start_refusals_are_one_line(over, match, tmp_path):

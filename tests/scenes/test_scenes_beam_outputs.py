@@ -80,13 +80,14 @@ def test_fields_in_hdf5_and_paraview_only_when_asked(tmp_path):
     with h5py.File(tmp_path / "a" / "results.h5") as f:
         snaps = f["snapshots"]
         assert {"section_n", "section_Gamma", "section_velocity"} <= set(snaps)
-        # at the points that carry the rotations: Galerkin, p = 4, n_ctrl = 31: 4 Gauss
-        # points in each of the 27 knot intervals and both ends, 110
-        assert "section_m" not in snaps and snaps["section_n"].shape[1:] == (110, 3)
+        # at the points that carry the rotations: Galerkin, p = 4, n_ctrl = 31, the
+        # gauss-spline rule: half the 138 B-splines of its product space (69 nodes) and
+        # both ends, 71
+        assert "section_m" not in snaps and snaps["section_n"].shape[1:] == (71, 3)
         # velocity at those points is B0 v; the first is s = 0: the hinge point does not move
         assert np.max(np.abs(snaps["section_velocity"][:, 0])) < 1e-12
     m = meshio.read(sorted(glob.glob(str(tmp_path / "a" / "paraview" / "*.vtu")))[-1])
-    assert {"n", "Gamma", "velocity"} <= set(m.point_data) and m.point_data["n"].shape == (110, 3)
+    assert {"n", "Gamma", "velocity"} <= set(m.point_data) and m.point_data["n"].shape == (71, 3)
     _run(tmp_path / "b")
     with h5py.File(tmp_path / "b" / "results.h5") as f:
         assert not [k for k in f["snapshots"] if k.startswith("section_")]

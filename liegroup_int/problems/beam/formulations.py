@@ -9,7 +9,7 @@ from .problem import ALL_FORMULATIONS, BeamProblem
 
 def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, formulation: str = "primal", quadrature: str = "gauss-p",
+                 kelvin_voigt: float = 0.0, formulation: str = "primal", quadrature: str = "auto",
                  bodies: tuple = ()):
     """A :class:`~.problem.BeamProblem` (``"primal"``, ``"mixed"``) or a
     :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, with its ``quadrature`` rule

@@ -147,7 +147,8 @@ class GalerkinBeamProblem(BeamBase):
         the default: locking-free at low degree) or ``p + 1`` (the rule ``"gauss-full"``).
     quadrature : str
         Quadrature rule of the stiffness (:data:`liegroup_int.iga.quadrature.RULES`) with
-        ``integration = "reduced"``.
+        ``integration = "reduced"``; ``"auto"`` (the default): the Gaussian spline rule
+        ``"gauss-spline"`` where it is found for p >= 3, else ``"gauss-p"``.
     bodies : tuple of EndBody
         Rigid bodies fixed to the ends (at most one per end): their mass and principal
         inertia join the end rows of the consistent mass matrices (the B-spline basis
@@ -162,7 +163,7 @@ class GalerkinBeamProblem(BeamBase):
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "gauss-p",
+                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "auto",
                  bodies: tuple = ()):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
