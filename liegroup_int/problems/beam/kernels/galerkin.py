@@ -370,8 +370,8 @@ def _solve(d, w, out, R, u1):
     _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
     _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
     _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
-    _constrain_hinges(out[1], d, R, w, u1, 0)
-    _constrain_hinges(out[3], d, R, w, u1, 1)
+    for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
+        _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field)
 
 
 @njit(cache=True, fastmath=False, inline="always")
