@@ -114,7 +114,7 @@ class CollocationData(NamedTuple):
     tmp: np.ndarray  # (n, 12) work of the dense solve, or (0, 12)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
 def unpack(flat, head):
     """The :class:`CollocationData` of :func:`.adapters.pack`'s arrays (views)."""
     return CollocationData(

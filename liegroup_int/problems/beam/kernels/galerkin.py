@@ -106,7 +106,7 @@ class GalerkinData(NamedTuple):
     hinge_kc: np.ndarray
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
 def unpack(flat, head):
     """The :class:`GalerkinData` of :func:`.adapters.pack`'s arrays (views)."""
     return GalerkinData(
