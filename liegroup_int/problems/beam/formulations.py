@@ -9,11 +9,11 @@ from .problem import ALL_FORMULATIONS, BeamProblem
 
 def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, formulation: str = "primal", quadrature: str = "auto",
+                 kelvin_voigt: float = 0.0, formulation: str = "galerkin", quadrature: str = "auto",
                  bodies: tuple = ()):
-    """A :class:`~.problem.BeamProblem` (``"primal"``, ``"mixed"``) or a
-    :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, with its ``quadrature`` rule
-    and end ``bodies``) with these arguments."""
+    """A :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, the default, with its
+    ``quadrature`` rule and end ``bodies``) or a :class:`~.problem.BeamProblem` (``"primal"``,
+    ``"mixed"`` collocation) with these arguments, as ``space.formulation`` of a scene."""
     if formulation not in ALL_FORMULATIONS:
         raise ValueError(f"formulation: expected one of {', '.join(ALL_FORMULATIONS)}, got {formulation!r}")
     if formulation == "galerkin":
