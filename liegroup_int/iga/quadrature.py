@@ -130,9 +130,10 @@ def _gauss_spline_rule(space) -> PatchRule:
 
 
 def _auto_rule(space) -> PatchRule:
-    """``gauss-spline`` for p >= 3 where its iteration converges (p = 3..6 always), else
-    ``gauss-p`` (at p = 2 gauss-spline is less accurate in the first modes)."""
-    if space.degree >= 3:
+    """``gauss-spline`` for p = 3..7 where its iteration converges (p = 3..6 always), else
+    ``gauss-p`` (at p = 2 gauss-spline is less accurate in the first modes; at p >= 8 its
+    iteration does not converge)."""
+    if 3 <= space.degree <= 7:
         try:
             return _gauss_spline_rule(space)
         except ValueError:
@@ -161,7 +162,7 @@ RULE_DESCRIPTIONS = {
     "gauss-2": "2 Gauss points per knot interval for every term",
     "greville": "one point per control point (Greville abscissae), weights exact for the basis",
     "gauss-spline": "Gaussian rule of the products N_i' N_j (exact as gauss-p, about (p + 1) / 2 points per interval)",
-    "auto": "gauss-spline for p >= 3 where it is found (p = 3..6 always), else gauss-p",
+    "auto": "gauss-spline for p = 3..7 where it is found (p = 3..6 always), else gauss-p",
 }
 
 

@@ -96,7 +96,7 @@ KEYS = {
             "(resultant splines)",
             choices=("primal", "mixed", "galerkin")),
         Key("space.quadrature", "str", "auto",
-            "quadrature rule of the galerkin stiffness (auto: gauss-spline for p >= 3 where it is found, p = 3..6 "
+            "quadrature rule of the galerkin stiffness (auto: gauss-spline for p = 3..7 where it is found, p = 3..6 "
             "always, else gauss-p; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
             "(p + 1) / 2 points per knot interval; gauss-p: p Gauss points per knot interval; both integrate the "
             "straight beam's stiffness at rest exactly)",

@@ -78,7 +78,7 @@ def test_unsolved_space_raises():
 
 @pytest.mark.parametrize("p,expected", [(2, "gauss-p"), (4, "gauss-spline"), (6, "gauss-spline"), (8, "gauss-p")])
 def test_auto_rule_choice(p, expected):
-    """``auto``: gauss-spline for p >= 3 where it is found, else gauss-p; the rule names
+    """``auto``: gauss-spline for p = 3..7 where it is found, else gauss-p; the rule names
     what it chose."""
     space = problem(load_scene("cantilever", {"space.degree": p, "space.n_ctrl": 21})).space
     assert patch_rule(space, "auto").name == expected

@@ -1,7 +1,7 @@
 """Quadrature rules of the Galerkin beam's stiffness (``space.quadrature``): ``gauss-p``
 (p Gauss points per knot interval for every term) and ``gauss-spline`` (the Gaussian rule
 of the stiffness' spline space, about (p + 1) / 2 points per interval; the ``auto``
-default for p >= 3) against the two-rule ``gauss`` (p + 1 for bending, p for axial and
+default for p = 3..7) against the two-rule ``gauss`` (p + 1 for bending, p for axial and
 shear): rank, spectrum at rest, natural frequencies, energy, backends.
 benchmarks/galerkin_quadrature.py prints every rule."""
 

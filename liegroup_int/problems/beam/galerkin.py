@@ -148,7 +148,7 @@ class GalerkinBeamProblem(BeamBase):
     quadrature : str
         Quadrature rule of the stiffness (:data:`liegroup_int.iga.quadrature.RULES`) with
         ``integration = "reduced"``; ``"auto"`` (the default): the Gaussian spline rule
-        ``"gauss-spline"`` where it is found for p >= 3, else ``"gauss-p"``.
+        ``"gauss-spline"`` where it is found for p = 3..7, else ``"gauss-p"``.
     bodies : tuple of EndBody
         Rigid bodies fixed to the ends (at most one per end): their mass and principal
         inertia join the end rows of the consistent mass matrices (the B-spline basis
