@@ -74,9 +74,9 @@ def spectrum_table(rules, degrees, sizes, ref: np.ndarray) -> None:
                     lam_gauss[n] = lam
                 err = np.abs(distinct_frequencies(natural_frequencies(pb), 4) / ref - 1.0)
                 errs.append(err)
-                ratio = lam / lam_gauss[n] if n in lam_gauss else float("nan")
+                ratio = f"{lam / lam_gauss[n]:.3f}" if n in lam_gauss else "-"  # gauss not run
                 print(f"| {rule} | {p} | {n} | {pb.m} | {null} | {smin:.1e} | {ev.real.max() / lam:.1e} | {lam:.4g} "
-                      f"| {ratio:.3f} | {' '.join(f'{e:.1e}' for e in err)} |", flush=True)
+                      f"| {ratio} | {' '.join(f'{e:.1e}' for e in err)} |", flush=True)
             h = np.log(1.0 / (np.array(sizes) - p))
             if np.all(np.isfinite(errs)):
                 slopes[(rule, p)] = [np.polyfit(h, np.log(np.array(errs)[:, j]), 1)[0] for j in range(4)]
@@ -213,15 +213,15 @@ def cost_table(rules, sizes, steps: int) -> None:
 
 
 def main(argv=None) -> None:
-    ap = parser(__doc__, "p = 4 only, rules gauss and gauss-p, n_ctrl 11 21 (cost: 21, 200 steps)")
+    ap = parser(__doc__, "p = 4 only, rules gauss-p and gauss-spline, n_ctrl 11 21 (cost: 21, 200 steps)")
     ap.add_argument("--rules", nargs="+", default=None, choices=list(RULES),
-                    help="rules to compare (default: all; --quick: gauss and gauss-p)")
+                    help="rules to compare (default: all but auto; --quick: gauss-p and gauss-spline)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["spectrum", "energy", "tip", "rollup", "cost"])
     args = ap.parse_args(argv)
     degrees, sizes = ((4,), (11, 21)) if args.quick else ((4, 3, 2), (11, 21, 41))
     cost_sizes, steps = ((21,), 200) if args.quick else ((21, 41, 61, 121), 2000)
     if args.rules is None:
-        args.rules = ["gauss", "gauss-p"] if args.quick else list(RULES)
+        args.rules = ["gauss-p", "gauss-spline"] if args.quick else [r for r in RULES if r != "auto"]
     if "spectrum" not in args.skip:
         spectrum_table(args.rules, degrees, sizes, reference_frequencies())
         print()
