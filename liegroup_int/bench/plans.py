@@ -132,7 +132,7 @@ def plan_for(scene: str, quick: bool = False, t_end: float | None = None) -> Pla
 
     Generic plan: the scene's own span and output interval, our runs at the scene's
     ``(degree, n_ctrl)`` and at about half ``n_ctrl``, the reference at ``2 n_ctrl - 1``,
-    no peer (PyElastica set-ups exist for ``pendulum`` and ``cantilever`` only).
+    no peer (PyElastica set-ups exist for ``pendulum``, ``cantilever`` and ``spinning_helix`` only).
     """
     table = QUICK if quick else PLANS
     if scene in table:
