@@ -91,7 +91,7 @@ def _add_result_commands(sub) -> None:
     pl.add_argument("--times", type=float, nargs="+", default=None, metavar="T",
                     help="times of the deformed shapes (nearest recorded outputs)")
     be = sub.add_parser("bench", help="work-precision of a beam scene: RKMK methods against PyElastica")
-    be.add_argument("scene", help="pendulum, cantilever (with PyElastica), or any beam scene (ours only)")
+    be.add_argument("scene", help="pendulum, cantilever, spinning_helix (with PyElastica), or any beam scene (ours only)")
     be.add_argument("--quick", action="store_true", help="short span, coarse ladder (about a minute)")
     be.add_argument("--t-end", type=float, default=None, metavar="T", help="span of the compared tip history [s]")
     be.add_argument("--no-peer", action="store_true", help="skip the PyElastica runs")

@@ -1,8 +1,17 @@
 """PyElastica (``pip install -e ".[peers]"``, import ``elastica``) set-ups of the built-in
-``pendulum`` and ``cantilever`` scenes: the peer of ``liegroup-int bench`` and of
-``benchmarks/pyelastica_compare.py``. Importing this module needs PyElastica.
+``pendulum``, ``cantilever`` and ``spinning_helix`` scenes: the peer of ``liegroup-int bench``
+and of ``benchmarks/pyelastica_compare.py``. Importing this module needs PyElastica.
 
-Both rods lie along +x1 from the origin; the tip is the last node. PyElastica's
+The pendulum and the cantilever lie along +x1 from the origin; the tip is the last node.
+The spinning helix (:func:`helix_rod_state`): nodes on the exact quarter helix
+(``liegroup_int.iga.geometry.helix_quarter_exact``, equal arc-length spacing), directors our
+reference frame (``frame`` of the scene's space) at the element midpoints, each turned by the
+least rotation that puts ``d3`` on the element's chord (PyElastica requires ``d3`` along the
+chord; the turn is O(h^2)); rest strains and curvatures set to those of this initial
+configuration (``rest_sigma = sigma``, ``rest_kappa = kappa``: PyElastica computes ``sigma``
+and ``kappa`` at creation but leaves the rest values zero, which would make a curved rod
+spring straight); velocities ``omega x x`` at the nodes and angular velocities ``Q omega``
+(material frame) on the elements, the rigid rotation of the scene. PyElastica's
 ``CosseratRod.straight_rod`` derives everything from a radius (circle): area
 ``A = pi r^2``, ``I1 = I2 = A^2 / (4 pi)``, ``I3 = 2 I1``, shear factor
 ``alpha_c = 27/28`` (PyElastica 1.0.0; older versions used 4/3). After creation we
@@ -52,7 +61,7 @@ from elastica.version import VERSION  # noqa: F401  (reported by the benchmarks)
 
 @dataclass(frozen=True)
 class Case:
-    """One of the two scenes in PyElastica's terms."""
+    """One of the scenes in PyElastica's terms."""
 
     name: str
     E: float
@@ -67,6 +76,8 @@ class Case:
     line_load: tuple = (0.0, 0.0, 0.0)   # N/m, applied as GravityForces with g = q / (rho A)
     tip_force: tuple = (0.0, 0.0, 0.0)   # N, EndpointForces on the last node
     axial_factor: float = 1.0            # multiplies E A (diagnostic variant only)
+    geometry: str = "straight"           # "straight" (along +x1) or "helix" (helix_rod_state)
+    omega: tuple = (0.0, 0.0, 0.0)       # rad/s, initial rigid angular velocity about the origin
 
     @property
     def radius(self) -> float:
@@ -95,7 +106,41 @@ def cantilever_case() -> Case:
                 I2=t**4 / 12, J=0.1406 * t**4, bc="clamped", tip_force=(0.0, 0.0, -100.0))
 
 
-CASES = {"pendulum": pendulum_case, "cantilever": cantilever_case}
+def spinning_helix_case() -> Case:
+    d, E = 0.01, 5e6
+    A, I = pi * d**2 / 4, pi * d**4 / 64
+    return Case("spinning_helix", E=E, G=E / 3.0, rho=1100.0, A=A, I1=I, I2=I, J=2 * I, length=sqrt(13.0) / 4.0,
+                bc="pinned", line_load=(0.0, 0.0, -0.8475), geometry="helix", omega=(0.0, 0.0, 2.0 * pi))
+
+
+CASES = {"pendulum": pendulum_case, "cantilever": cantilever_case, "spinning_helix": spinning_helix_case}
+
+
+def helix_rod_state(n_elements: int, omega=(0.0, 0.0, 0.0)) -> dict:
+    """Initial state of the quarter-helix rod (module doc): ``position`` (3, n + 1),
+    ``directors`` (3, 3, n) (rows d1, d2, d3), ``velocity`` (3, n + 1) and ``omega``
+    (3, n) (material frame); and ``frame_turn`` (n,), the angle [rad] by which each
+    element's directors were turned from our frame to put ``d3`` on the chord."""
+    from ..groups.so3 import exp_so3
+    from ..iga.geometry import helix_quarter_exact
+    from ..scenes import load_scene
+    from ..scenes.beam import frame_space
+
+    x = helix_quarter_exact(np.linspace(0.0, 1.0, n_elements + 1))          # (n + 1, 3)
+    chord = np.diff(x, axis=0)
+    chord /= np.linalg.norm(chord, axis=1, keepdims=True)
+    space = frame_space(load_scene("spinning_helix"))[0]
+    r0 = space.frame((np.arange(n_elements) + 0.5) / n_elements)[0]       # columns d1, d2, d3
+    axis = np.cross(r0[:, :, 2], chord)
+    sin, cos = np.linalg.norm(axis, axis=1), np.einsum("ki,ki->k", r0[:, :, 2], chord)
+    turn = np.arctan2(sin, cos)
+    safe = np.where(sin > 0.0, sin, 1.0)[:, None]
+    r = exp_so3(axis * (turn[:, None] / safe)) @ r0
+    r[:, :, 2] = chord                                                        # exact to round-off
+    w = np.asarray(omega, float)
+    return {"position": x.T.copy(), "directors": np.ascontiguousarray(np.transpose(r, (2, 1, 0))),
+            "velocity": np.cross(w, x).T.copy(), "omega": np.einsum("kji,j->ik", r, w),
+            "frame_turn": turn}
 
 
 # ----------------------------------------------------------------------------- linear variant
@@ -157,12 +202,22 @@ class LinearCosseratRod(ea.CosseratRod):
 
 # ----------------------------------------------------------------------------- set-up
 def make_rod(case: Case, n_elements: int, model: str = "pyelastica") -> ea.CosseratRod:
-    """``straight_rod`` with the section constants overwritten to match ours exactly."""
+    """``straight_rod`` with the section constants overwritten to match ours exactly (the
+    helix: given nodes and directors, rest strains and initial motion as in the module doc)."""
     cls = {"pyelastica": ea.CosseratRod, "linear": LinearCosseratRod}[model]
+    shape = {}
+    if case.geometry == "helix":
+        state = helix_rod_state(n_elements, case.omega)
+        shape = {"position": state["position"], "directors": state["directors"]}
     rod = cls.straight_rod(
         n_elements, start=np.zeros(3), direction=np.array([1.0, 0.0, 0.0]),
         normal=np.array([0.0, 1.0, 0.0]), base_length=case.length, base_radius=case.radius,
-        density=case.rho, youngs_modulus=case.E, shear_modulus=case.G)
+        density=case.rho, youngs_modulus=case.E, shear_modulus=case.G, **shape)
+    if shape:  # stress-free in the curved initial configuration, moving with the rigid rotation
+        rod.rest_sigma[...] = rod.sigma
+        rod.rest_kappa[...] = rod.kappa
+        rod.velocity_collection[...] = state["velocity"]
+        rod.omega_collection[...] = state["omega"]
     dl = rod.rest_lengths
     S = np.diag([case.G * case.A, case.G * case.A, case.axial_factor * case.E * case.A])
     B = np.diag([case.E * case.I1, case.E * case.I2, case.G * case.J])

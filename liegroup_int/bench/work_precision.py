@@ -420,7 +420,7 @@ def _peer_runs(plan: Plan, cached: Callable, ref: Run, log: Callable | None) -> 
         return [], None, note
     case = peer_case(Path(plan.scene).stem)
     if case is None:
-        note = f"no PyElastica set-up for scene {plan.scene!r} (pendulum and cantilever only)"
+        note = f"no PyElastica set-up for scene {plan.scene!r} ({', '.join(P.CASES)} only)"
         _say(log, note)
         return [], P.VERSION, note
     P.warm_up()
