@@ -57,6 +57,7 @@ from ..integrators import (
     stable_step,
 )
 from ..scenes import load_scene
+from ..scenes.beam import DEFAULT_QUADRATURE
 from ..scenes.beam import problem as scene_problem
 from .beam_internals import size_kelvin_voigt
 from .plans import Plan
@@ -100,6 +101,11 @@ class Run:
 
 
 # ----------------------------------------------------------------------------- cache
+#: Part of the cache key of every run of ours: runs cached with another Galerkin stiffness
+#: rule are not reused.
+OURS_TAG = ("space.quadrature", DEFAULT_QUADRATURE)
+
+
 def _key(*parts) -> str:
     return hashlib.sha1(json.dumps(parts, default=str).encode()).hexdigest()[:16]
 
@@ -476,7 +482,8 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
         return built[(p, n, form)]
 
     def cached(key_parts, make: Callable[[], Run]) -> Run:
-        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts)
+        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts,
+                   *(() if key_parts[0] == "peer" else OURS_TAG))
         hit = _load_cached(cache, key)
         if hit is not None:
             return hit

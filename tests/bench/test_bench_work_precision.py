@@ -152,6 +152,26 @@ def test_outputs_and_cache(tiny):
     assert [(r.formulation, r.kelvin_voigt) for r in again.ours] == [(r.formulation, r.kelvin_voigt) for r in res.ours]
 
 
+def test_cache_is_not_reused_under_another_quadrature(tiny, monkeypatch):
+    """A cache filled under one Galerkin stiffness rule (OURS_TAG) is not read under
+    another: the first run of ours (the reference) is recomputed, here caught before it
+    integrates."""
+    wp = sys.modules["liegroup_int.bench.work_precision"]  # the module (the package exports the function)
+    out, _ = tiny
+
+    class Recomputed(Exception):
+        pass
+
+    def refuse(*args, **kwargs):
+        raise Recomputed
+
+    monkeypatch.setattr(wp, "run_fixed", refuse)
+    work_precision(TINY, out, peer=False, log=None)  # same tag: everything from the cache
+    monkeypatch.setattr(wp, "OURS_TAG", ("space.quadrature", "gauss-p"))
+    with pytest.raises(Recomputed):
+        work_precision(TINY, out, peer=False, log=None)
+
+
 def _run(family, res, dt, cpu, err, status="ok"):
     return Run(family, res, dt, cpu_s=cpu, error=err, status=status)
 
