@@ -212,6 +212,8 @@ def test_tip_error_needs_the_same_grid():
 
 def test_missing_peer_is_reported(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "liegroup_int.bench.pyelastica_peer", None)  # import fails
+    # and not found as the package's attribute (set when another test imported it)
+    monkeypatch.delattr(sys.modules["liegroup_int.bench"], "pyelastica_peer", raising=False)
     plan = Plan(scene="pendulum", t_end=0.004, every=2e-3, reference=(4, 11), reference_y=0.4,
                 discretizations=((4, 11),), time_study=(4, 11), methods=("rkmk4",), dt_fractions=(1.0,),
                 adaptive=(), peer_elements=(50,), peer_linear=False)
