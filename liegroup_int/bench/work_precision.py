@@ -56,8 +56,8 @@ from ..integrators import (
     spectral_radius,
     stable_step,
 )
+from ..iga.quadrature import DEFAULT_RULE
 from ..scenes import load_scene
-from ..scenes.beam import DEFAULT_QUADRATURE
 from ..scenes.beam import problem as scene_problem
 from .beam_internals import size_kelvin_voigt
 from .plans import Plan
@@ -103,7 +103,7 @@ class Run:
 # ----------------------------------------------------------------------------- cache
 #: Part of the cache key of every run of ours: runs cached with another Galerkin stiffness
 #: rule are not reused.
-OURS_TAG = ("space.quadrature", DEFAULT_QUADRATURE)
+OURS_TAG = ("space.quadrature", DEFAULT_RULE)
 
 
 def _key(*parts) -> str:
@@ -435,7 +435,7 @@ def _peer_runs(plan: Plan, cached: Callable, ref: Run, log: Callable | None) -> 
         models.append(("linear", plan.peer_elements[-1]))
     peers = []
     for model, n in models:
-        r = cached(("peer", model, n), partial(run_peer, case, n, plan.t_end, plan.every, model))
+        r = cached(("peer", model, n), partial(run_peer, case, n, plan.t_end, plan.every, model), tag=())
         r.error = tip_error(r, ref)
         peers.append(r)
         _say(log, _describe(r))
@@ -481,9 +481,8 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
                           f"{d.max_real:.3g} 1/s{kv}, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
         return built[(p, n, form)]
 
-    def cached(key_parts, make: Callable[[], Run]) -> Run:
-        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts,
-                   *(() if key_parts[0] == "peer" else OURS_TAG))
+    def cached(key_parts, make: Callable[[], Run], tag: tuple = OURS_TAG) -> Run:
+        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts, *tag)
         hit = _load_cached(cache, key)
         if hit is not None:
             return hit

@@ -35,7 +35,7 @@ import numpy as np
 from .knots import greville
 from .spline_quadrature import SplineQuadratureError, gaussian_spline_rule, product_knots
 
-__all__ = ["PatchRule", "RULES", "RULE_DESCRIPTIONS", "exact_mass_rule", "gauss_points", "patch_rule"]
+__all__ = ["DEFAULT_RULE", "PatchRule", "RULES", "RULE_DESCRIPTIONS", "exact_mass_rule", "gauss_points", "patch_rule"]
 
 
 class PatchRule(NamedTuple):
@@ -117,16 +117,22 @@ def _greville_rule(space) -> PatchRule:
     return PatchRule(u, w, w.copy())
 
 
-def _gauss_spline_rule(space) -> PatchRule:
-    """The Gaussian rule of the products ``N_i' N_j``, arc-length weights."""
+def _spline_points(space) -> PatchRule:
+    """The Gaussian rule of the products ``N_i' N_j``, arc-length weights; raises
+    :class:`.spline_quadrature.SplineQuadratureError` where it is not found."""
     p = space.degree
-    try:
-        u, w = gaussian_spline_rule(product_knots(space.curve.knots, p), 2 * p - 1)
-    except SplineQuadratureError as exc:
-        raise ValueError(f"quadrature rule 'gauss-spline' at p = {p}: {exc}; choose space.quadrature = "
-                         f"\"gauss-p\"") from None
+    u, w = gaussian_spline_rule(product_knots(space.curve.knots, p), 2 * p - 1)
     w = w * _speed(space, u)
     return PatchRule(u, w, w.copy(), "gauss-spline")
+
+
+def _gauss_spline_rule(space) -> PatchRule:
+    """:func:`_spline_points`, or a one-line error naming the fallback."""
+    try:
+        return _spline_points(space)
+    except SplineQuadratureError as exc:
+        raise ValueError(f"quadrature rule 'gauss-spline' at p = {space.degree}: {exc}; choose "
+                         f"space.quadrature = \"gauss-p\"") from None
 
 
 def _auto_rule(space) -> PatchRule:
@@ -135,11 +141,14 @@ def _auto_rule(space) -> PatchRule:
     iteration does not converge)."""
     if 3 <= space.degree <= 7:
         try:
-            return _gauss_spline_rule(space)
-        except ValueError:
+            return _spline_points(space)
+        except SplineQuadratureError:
             pass
     return RULES["gauss-p"](space)._replace(name="gauss-p")
 
+
+#: The stiffness rule of the Galerkin beam unless one is chosen (``space.quadrature``).
+DEFAULT_RULE = "auto"
 
 #: Named rules: ``space -> PatchRule``.
 RULES: dict[str, Callable] = {

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..iga import CollocationSpace, NurbsCurve, arc_length, arc_nurbs_quadratic, helix_quarter, k_refine, straight
 from ..iga.patches import JOINT_KINDS, PatchedSpace, split_curve
-from ..iga.quadrature import RULES
+from ..iga.quadrature import DEFAULT_RULE, RULES
 from ..problems.beam import (
     BeamProblem,
     BeamState,
@@ -30,8 +30,6 @@ from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
 from .schema import Key, SceneError, flatten, non_negative, positive, resolve_keys
 
 ZERO = (0.0, 0.0, 0.0)
-#: ``space.quadrature``'s default: the Galerkin stiffness rule of every built-in scene
-DEFAULT_QUADRATURE = "auto"
 
 
 def _int_between(lo, hi):
@@ -97,7 +95,7 @@ KEYS = {
             "growing mode), the paper's primal collocation (primal), or the locking-free mixed collocation "
             "(resultant splines)",
             choices=("primal", "mixed", "galerkin")),
-        Key("space.quadrature", "str", DEFAULT_QUADRATURE,
+        Key("space.quadrature", "str", DEFAULT_RULE,
             "quadrature rule of the galerkin stiffness (auto: gauss-spline for p = 3..7 where it is found, p = 3..6 "
             "always, else gauss-p; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
             "(p + 1) / 2 points per knot interval; gauss-p: p Gauss points per knot interval; both integrate the "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ...iga.quadrature import DEFAULT_RULE
 from .galerkin import GalerkinBeamProblem
 from .model import BoundaryConditions, InitialConditions, Loads
 from .problem import ALL_FORMULATIONS, BeamProblem
@@ -9,7 +10,7 @@ from .problem import ALL_FORMULATIONS, BeamProblem
 
 def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, formulation: str = "galerkin", quadrature: str = "auto",
+                 kelvin_voigt: float = 0.0, formulation: str = "galerkin", quadrature: str = DEFAULT_RULE,
                  bodies: tuple = ()):
     """A :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, the default, with its
     ``quadrature`` rule and end ``bodies``) or a :class:`~.problem.BeamProblem` (``"primal"``,

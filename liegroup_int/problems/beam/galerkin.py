@@ -37,6 +37,7 @@ import numpy as np
 from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3, left_jacobian
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
+from ...iga.quadrature import DEFAULT_RULE
 from .base import SECTION_FIELDS, BeamBase
 from .kinematics import jr_times, perpendicular_rows, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
@@ -163,7 +164,7 @@ class GalerkinBeamProblem(BeamBase):
     def __init__(self, space: CollocationSpace, constants: SectionConstants,
                  bcs: BoundaryConditions = BoundaryConditions(), loads: Loads = Loads(),
                  initial: InitialConditions = InitialConditions(), backend: str = "numpy",
-                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = "auto",
+                 kelvin_voigt: float = 0.0, integration: str = "reduced", quadrature: str = DEFAULT_RULE,
                  bodies: tuple = ()):
         if integration not in INTEGRATIONS:
             raise ValueError(f"integration: expected one of {', '.join(INTEGRATIONS)}, got {integration!r}")
