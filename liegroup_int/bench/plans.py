@@ -40,7 +40,7 @@ class Plan:
         ``(degree, n_ctrl)`` of our runs at each method's stable step.
     formulations : tuple of str
         Spatial formulations of those runs (``"primal"``, ``"mixed"``, ``"galerkin"``;
-        ``space.formulation``).
+        ``space.formulation``), or a variant of :data:`VARIANTS` (``"galerkin-ri"``).
         Primal runs are undamped; mixed runs carry the Kelvin-Voigt damping sized from the
         dense spectrum at rest (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`).
         The time study is primal whatever this says.
@@ -86,8 +86,9 @@ class Plan:
             raise ValueError(f"plan {self.scene}: every={self.every} must divide t_end={self.t_end}")
         if not self.discretizations:
             raise ValueError(f"plan {self.scene}: no discretizations")
-        from .beam_internals import ALL_FORMULATIONS as FORMULATIONS
+        from .beam_internals import ALL_FORMULATIONS
 
+        FORMULATIONS = ALL_FORMULATIONS + tuple(VARIANTS)
         if not self.formulations or any(f not in FORMULATIONS for f in self.formulations) \
                 or len(set(self.formulations)) != len(self.formulations):
             raise ValueError(f"plan {self.scene}: formulations must be distinct, from {', '.join(FORMULATIONS)}; "
@@ -95,6 +96,13 @@ class Plan:
         if not all(0 < f <= 1 for f in self.dt_fractions):
             raise ValueError(f"plan {self.scene}: dt_fractions must lie in (0, 1], got {self.dt_fractions}")
 
+
+#: Variants of a formulation a plan may name among its ``formulations``: a label and the
+#: scene keys it sets. ``galerkin-ri``: Galerkin with ``section.rotary_inertia_scale = "auto"``
+#: (rotary-inertia scaling; its errors are measured against the unscaled reference).
+VARIANTS: dict[str, dict] = {
+    "galerkin-ri": {"space.formulation": "galerkin", "section.rotary_inertia_scale": "auto"},
+}
 
 #: Built-in plans (cantilever over 0.05 s, pendulum over 1 s, spinning helix over 0.5 s: half a
 #: turn, which keeps its full study near 20 min of CPU on two cores). Every

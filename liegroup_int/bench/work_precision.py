@@ -60,7 +60,7 @@ from ..iga.quadrature import DEFAULT_RULE
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
 from .beam_internals import size_kelvin_voigt
-from .plans import Plan
+from .plans import VARIANTS, Plan
 
 #: Fixed-step factors tried for the peer's stable step, largest first (times its estimate).
 PEER_DT_FACTORS = (2.0, 1.5, 1.2, 1.0, 0.8, 0.6, 0.5, 0.4)
@@ -135,7 +135,8 @@ def _problem(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, b
     # built without sizing ``kelvin_voigt = "auto"`` (undamped; :func:`prepare` sizes mixed)
     return scene_problem(load_scene(scene, {"space.degree": degree, "space.n_ctrl": n_ctrl, "t_end": t_end,
                                             "output.every": every, "integrator.dt": every,
-                                            "integrator.backend": backend, "space.formulation": formulation}))
+                                            "integrator.backend": backend,
+                                            **VARIANTS.get(formulation, {"space.formulation": formulation})}))
 
 
 def fit_step(dt: float, every: float) -> float:

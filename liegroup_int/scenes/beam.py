@@ -22,6 +22,7 @@ from ..problems.beam import (
     SupportMotion,
 )
 from ..problems.beam.damping import size_kelvin_voigt
+from ..problems.beam.inertia_scaling import MAX_UNKNOWNS, given_scale_report, size_rotary_inertia
 from ..problems.beam.formulations import beam_problem
 from ..problems.beam.model import PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
@@ -34,6 +35,10 @@ ZERO = (0.0, 0.0, 0.0)
 
 def _int_between(lo, hi):
     return lambda v: None if lo <= v <= hi else f"an integer from {lo} to {hi}"
+
+
+def _at_least_one(v):
+    return None if v == "auto" or v >= 1 else 'a factor >= 1 or "auto"'
 
 
 def _end_keys(end: str) -> list[Key]:
@@ -115,6 +120,15 @@ KEYS = {
         Key("section.b", "float", None, "width along d1 (rectangle)", "m", positive),
         Key("section.h", "float", None, "height along d2 (rectangle)", "m", positive),
         Key("section.shear_factor", "float", 1.0, "shear correction factor k (G A_s = k G A)", "", positive),
+        Key("section.rotary_inertia_scale", "number_or_auto", 1.0,
+            "factor >= 1 on the bending rotary inertia rho I1, rho I2 (1 = the exact model; a larger factor lowers "
+            "the shear-rotation branch that bounds the stable step; \"auto\" = the largest that moves the lowest "
+            "section.rotary_inertia_modes frequencies by at most section.rotary_inertia_tol, capped where the "
+            "top frequency stops falling; galerkin; reported in summary.json)", "", _at_least_one),
+        Key("section.rotary_inertia_modes", "int", 6, "lowest distinct modes checked by rotary_inertia_scale",
+            "", _int_between(1, 50)),
+        Key("section.rotary_inertia_tol", "float", 1e-3,
+            "relative frequency shift of those modes allowed by rotary_inertia_scale = \"auto\"", "", positive),
         Key("section.EA", "float", None, "axial stiffness (explicit)", "N", positive),
         Key("section.GA", "float", None, "shear stiffness (explicit)", "N", positive),
         Key("section.EI1", "float", None, "bending stiffness about d1 (explicit)", "N m^2", positive),
@@ -302,7 +316,7 @@ def _pieces(scene: Scene):
                          "remove [geometry]")
     geo_keys = {k.split(".", 1)[1]: Key(k.split(".", 1)[1], v.kind, v.default, v.doc, v.unit, v.check, v.choices)
                 for k, v in KEYS.items() if k.startswith("geometry.")}
-    section_keys = {k: v for k, v in KEYS.items() if k.startswith(SECTION_PREFIXES) and k != "material.kelvin_voigt"}
+    section_keys = {k: v for k, v in KEYS.items() if k.startswith(SECTION_PREFIXES) and k not in SCENE_WIDE}
     out = []
     for i, entry in enumerate(scene["beams"]):
         where = f"beams[{i}]"
@@ -323,11 +337,14 @@ def _pieces(scene: Scene):
 
 #: Key prefixes a ``[[beams]]`` entry may set for itself (its section).
 SECTION_PREFIXES = ("section.", "material.")
+#: Keys under those prefixes set once for the whole scene.
+SCENE_WIDE = ("material.kelvin_voigt", "section.rotary_inertia_scale", "section.rotary_inertia_modes",
+              "section.rotary_inertia_tol")
 
 
 def _unknown_section_key(scene: Scene, where: str, own: dict, section_keys: dict):
     bad = sorted(set(own) - set(section_keys))[0]
-    hint = " (kelvin_voigt is set once, in [material])" if bad == "material.kelvin_voigt" else ""
+    hint = f" ({bad.split('.')[1]} is set once, in [{bad.split('.')[0]}])" if bad in SCENE_WIDE else ""
     raise SceneError(f"{scene.source}: {where}: unknown key '{bad}'{hint}")
 
 
@@ -658,13 +675,59 @@ def _undamped(scene: Scene) -> BeamProblem:
     bodies = _bodies(scene, space)
     if bodies and scene["space.formulation"] != "galerkin":
         raise SceneError(f"{scene.source}: key 'bodies': end bodies need space.formulation = \"galerkin\"")
+
+    def make(scale):
+        scaled = section if scale == 1.0 else (section.with_rotary_inertia_scale(scale) if not isinstance(
+            section, tuple) else tuple(sec.with_rotary_inertia_scale(scale) for sec in section))
+        try:
+            return beam_problem(space, scaled, bcs, loads, ic, backend=scene["integrator.backend"],
+                                kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"],
+                                quadrature=scene["space.quadrature"], bodies=bodies)
+        except ValueError as exc:
+            raise SceneError(f"{scene.source}: {exc}") from None
+
+    return _rotary_inertia(scene, make)
+
+
+def _rotary_inertia(scene: Scene, make) -> BeamProblem:
+    """The problem ``make(scale)`` with ``section.rotary_inertia_scale`` applied (``"auto"``
+    sized by :func:`~liegroup_int.problems.beam.inertia_scaling.size_rotary_inertia`) and its
+    report as ``rotary_inertia_report`` (Galerkin; None where the modal check does not apply)."""
+    given, key = scene["section.rotary_inertia_scale"], "section.rotary_inertia_scale"
+    modes = scene["section.rotary_inertia_modes"]
+    if given != "auto":
+        pb = make(given)
+        if given != 1.0 and pb.formulation == "galerkin" and 6 * pb.n <= MAX_UNKNOWNS and _modal_plain(pb):
+            pb.rotary_inertia_report = given_scale_report(pb, given, modes)
+        return pb
+    if scene["space.formulation"] != "galerkin":
+        raise SceneError(f"{scene.source}: key '{key}' = 'auto' needs space.formulation = \"galerkin\" (its modal "
+                         "analysis); give a number")
+    pb = make(1.0)
+    if not _modal_plain(pb):
+        raise SceneError(f"{scene.source}: key '{key}' = 'auto': the modal check covers a beam with supports only "
+                         "(no bodies, joints or hinges); give a number")
+    cache = (scene.kind, repr(sorted(scene.params.items())))
     try:
-        pb = beam_problem(space, section, bcs, loads, ic, backend=scene["integrator.backend"],
-                          kelvin_voigt=0.0 if kv == "auto" else kv, formulation=scene["space.formulation"],
-                          quadrature=scene["space.quadrature"], bodies=bodies)
+        rep = _RI_SIZED[cache] if cache in _RI_SIZED else size_rotary_inertia(pb, modes,
+                                                                                scene["section.rotary_inertia_tol"])
     except ValueError as exc:
-        raise SceneError(f"{scene.source}: {exc}") from None
+        raise SceneError(f"{scene.source}: key '{key}' = 'auto': {exc}") from None
+    if len(_RI_SIZED) >= 32:
+        _RI_SIZED.pop(next(iter(_RI_SIZED)))
+    _RI_SIZED[cache] = rep
+    pb = make(rep.scale) if rep.scale != 1.0 else pb
+    pb.rotary_inertia_report = rep
     return pb
+
+
+def _modal_plain(pb) -> bool:
+    """Whether the Galerkin modal analysis at rest describes ``pb`` (no bodies, joints, hinges)."""
+    return not (pb.bodies or pb.joints or pb.hinges)
+
+
+#: Rotary-inertia factors sized in this process, by the scene's keys (as :data:`_SIZED`).
+_RI_SIZED: dict = {}
 
 
 def _sized(scene: Scene, pb: BeamProblem) -> BeamProblem:
@@ -915,6 +978,9 @@ def build(scene: Scene) -> Simulation:
                               else {"C_star": 4.0}),
                            "kelvin_voigt": pb.tau},
         **({"kelvin_voigt_auto": pb.damping_report.as_dict()} if pb.damping_report is not None else {}),
+        **({"rotary_inertia": pb.rotary_inertia_report.as_dict()} if pb.rotary_inertia_report is not None
+           else {"rotary_inertia": {"scale": scene["section.rotary_inertia_scale"]}}
+           if scene["section.rotary_inertia_scale"] != 1.0 else {}),
         **({"kelvin_voigt_auto": f"0 ({GALERKIN_CLEAN})"}
            if scene["material.kelvin_voigt"] == "auto" and pb.formulation == "galerkin" else {}),
         "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},

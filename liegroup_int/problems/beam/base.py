@@ -29,6 +29,7 @@ class BeamModel(Protocol):
     formulation: str
     tau: float
     damping_report: object
+    rotary_inertia_report: object
     space: object
     n: int
 
@@ -82,6 +83,8 @@ class BeamBase(Problem):
         self.tau = kelvin_voigt
         #: :class:`~.damping.DampingReport` when ``tau`` was sized automatically
         self.damping_report = None
+        #: :class:`~.inertia_scaling.RotaryInertiaReport` when the rotary inertia was scaled
+        self.rotary_inertia_report = None
         self.space, self.constants = space, constants
         self.bcs, self.loads, self.initial = bcs, loads, initial
         self.backend = backend

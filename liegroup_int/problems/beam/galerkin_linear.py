@@ -40,10 +40,12 @@ def energy_nullity(pb, tol: float = 1e-10) -> tuple[int, float]:
     return null, float(sv[-null - 1] / sv[0])
 
 
-def natural_frequencies(pb) -> np.ndarray:
+def natural_frequencies(pb, rotary_inertia_scale: float = 1.0) -> np.ndarray:
     """Natural frequencies [rad/s] of ``pb`` linearized at rest, ascending:
     ``K x = omega^2 M x`` with the consistent masses (``mu M`` for ``eta``, ``J_d M`` for
-    ``Theta_d``) and the supported rows removed."""
+    ``Theta_d``) and the supported rows removed. ``rotary_inertia_scale`` multiplies the
+    bending rotary inertia ``J_1, J_2`` (as
+    :meth:`~.model.SectionConstants.with_rotary_inertia_scale` does)."""
     import scipy.linalg
 
     gs, n = pb.gs, pb.n
@@ -51,7 +53,8 @@ def natural_frequencies(pb) -> np.ndarray:
     M = np.zeros((6 * n, 6 * n))
     M[:3 * n, :3 * n] = np.kron(gs.weighted_mass(pb.mu), np.eye(3))
     for d in range(3):
-        M[3 * n:, 3 * n:] += np.kron(gs.weighted_mass(pb.Jm[:, d]), np.diag(np.eye(3)[d]))
+        scale = rotary_inertia_scale if d < 2 else 1.0
+        M[3 * n:, 3 * n:] += np.kron(gs.weighted_mass(scale * pb.Jm[:, d]), np.diag(np.eye(3)[d]))
     free = ~np.concatenate([np.repeat(pb.fix_position, 3), np.repeat(pb.fix_rotation, 3)])
     K = (S.T @ S)[np.ix_(free, free)]
     w2 = scipy.linalg.eigh(K, M[np.ix_(free, free)], eigvals_only=True)

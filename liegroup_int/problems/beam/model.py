@@ -9,7 +9,7 @@ Units are SI throughout. The beam axis is the third material axis, so
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from math import isfinite, pi
 
 import numpy as np
@@ -153,6 +153,15 @@ class SectionConstants:
                 raise ParameterError(name, f"expected three positive, finite constants, got {v!r}")
         if not (self.mu > 0 and isfinite(self.mu)):
             raise ParameterError("mu", f"expected a positive, finite mass per length, got {self.mu!r}")
+
+    def with_rotary_inertia_scale(self, scale: float) -> "SectionConstants":
+        """The section with its bending rotary inertia ``rho I_1, rho I_2`` multiplied by
+        ``scale`` (>= 1); the polar inertia is kept (torsional waves run no faster than axial
+        ones, so it does not bound the stable step)."""
+        scale = float(scale)
+        if not (isfinite(scale) and scale >= 1.0):
+            raise ParameterError("rotary_inertia_scale", f"expected a factor >= 1, got {scale!r}")
+        return replace(self, Jm=(scale * self.Jm[0], scale * self.Jm[1], self.Jm[2]))
 
     @staticmethod
     def from_material(material: "Material", section: "Section") -> "SectionConstants":
