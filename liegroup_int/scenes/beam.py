@@ -24,7 +24,7 @@ from ..problems.beam import (
 from ..problems.beam.damping import size_kelvin_voigt
 from ..problems.beam.inertia_scaling import MAX_UNKNOWNS, given_scale_report, size_rotary_inertia
 from ..problems.beam.formulations import beam_problem
-from ..problems.beam.model import PROFILE_KINDS
+from ..problems.beam.model import END_TYPES, PROFILE_KINDS
 from ..problems.beam.problem import SECTION_FIELDS
 from ..problems.errors import ParameterError
 from .scene import ProblemKind, Scene, Simulation, Stability, register_kind
@@ -138,8 +138,9 @@ KEYS = {
         Key("section.rhoI1", "float", None, "rotational inertia per length about d1 (explicit)", "kg m", positive),
         Key("section.rhoI2", "float", None, "rotational inertia per length about d2 (explicit)", "kg m", positive),
         Key("section.rhoJ", "float", None, "polar inertia per length (explicit; default rhoI1 + rhoI2)", "kg m", positive),
-        Key("bc.start", "str", "clamped", "end condition at s = 0", choices=("clamped", "hinged", "free")),
-        Key("bc.end", "str", "free", "end condition at s = L", choices=("clamped", "hinged", "free")),
+        Key("bc.start", "str", "clamped", "end condition at s = 0 (roller: slides along its tangent, a coordinate "
+            "axis, without twisting; static and buckle only)", choices=END_TYPES),
+        Key("bc.end", "str", "free", "end condition at s = L (as bc.start)", choices=END_TYPES),
         Key("loads.gravity", "vec3", ZERO, "gravitational acceleration (adds rho A g per length)", "m/s^2"),
         Key("loads.distributed_force", "vec3", ZERO, "force per length, spatial", "N/m"),
         Key("loads.distributed_couple", "vec3", ZERO, "couple per length, spatial", "N m/m"),
@@ -958,6 +959,9 @@ def _quadrature_used(pb) -> dict:
 
 def build(scene: Scene) -> Simulation:
     pb = problem(scene, size_damping=True)
+    if getattr(pb, "rollers", ()):
+        raise SceneError(f"{scene.source}: key 'bc.{'start' if scene['bc.start'] == 'roller' else 'end'}' = "
+                         "'roller' is for `liegroup-int static` and `buckle`; use hinged or clamped ends to run")
     y0, static = (pb.initial_state(), {}) if scene["initial.state"] == "reference" else _static_start(scene, pb)
 
     def final_state(y):

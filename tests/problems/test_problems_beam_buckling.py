@@ -253,3 +253,56 @@ def test_lateral_torsional_buckling_of_a_narrow_cantilever():
     assert res.linear[0] == pytest.approx(prandtl, rel=5e-4)
     path = prandtl / np.sqrt((1 - 100.0 / 1e4) * (1 - 80.0 / 1e4))
     assert res.refined and res.load_factors[0] == pytest.approx(path, rel=3e-3)
+
+
+def _pinned_column(n_ctrl: int = 21):
+    """The column hinged at its base and on a roller at its top (it slides along z and does
+    not twist there), under the same dead 20 N."""
+    return problem(load_scene("column", {"integrator.backend": "numpy", "space.n_ctrl": n_ctrl,
+                                         "bc.start": "hinged", "bc.end": "roller"}))
+
+
+def test_euler_load_of_the_pinned_pinned_column():
+    """Hinged base, roller top: the critical load solves P (1 + P / GA - P / EA) = pi^2 EI / L^2
+    (theta'(0) = theta'(L) = 0 in the module docstring's equation), four times the clamped-free
+    one. At n_ctrl = 21 the refined factor is within 1e-6 of it (measured 1.8e-8); the second,
+    the strong plane's (EI2 = 4 EI1), extrapolated from the first critical state, within 1e-4
+    (measured 2.8e-5, the quadratic term as in the clamped-free test)."""
+    res = buckling_loads(_pinned_column(), 2, t=T_END)
+    p_cr = haringx(np.pi**2 * EI1 / L**2)
+    print(f"pinned-pinned: {res.load_factors * LOAD} N against {p_cr}, {haringx(np.pi**2 * EI2 / L**2)}; relative "
+          f"{res.load_factors[0] * LOAD / p_cr - 1:.2e}")
+    assert res.refined and res.singularity < 1e-6
+    assert res.load_factors[0] * LOAD == pytest.approx(p_cr, rel=1e-6)
+    assert res.load_factors[1] * LOAD == pytest.approx(haringx(np.pi**2 * EI2 / L**2), rel=1e-4)
+
+
+def test_roller_is_refused_where_it_does_not_apply(tmp_path, capsys):
+    """A roller is a static support: `run` refuses it in one line, collocation and a tilted
+    end tangent are refused by name."""
+    from liegroup_int.scenes import SceneError
+
+    rc = main(["run", "column", "--set", "bc.start=hinged", "--set", "bc.end=roller", "--out", str(tmp_path / "r")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and "roller" in err and "\n" not in err and not (tmp_path / "r").exists()
+    with pytest.raises(SceneError, match="roller.*galerkin"):
+        problem(load_scene("column", {"bc.end": "roller", "space.formulation": "primal"}))
+    with pytest.raises(SceneError, match="roller.*coordinate axis"):
+        problem(load_scene("column", {"bc.start": "hinged", "bc.end": "roller",
+                                      "geometry.direction": [0.0, 0.6, 0.8]}))
+
+
+def test_pinned_pinned_reactions_balance_the_loads(tmp_path):
+    """`static` on the hinged-roller column under its 20 N and a lateral 3 N/m: the two
+    supports' forces balance the applied loads to 1e-8 N (the Newton tolerance; the roller
+    takes the lateral share only), and by symmetry each takes half the lateral load to 1e-6
+    (the compression's P-delta moment is symmetric too)."""
+    out = tmp_path / "st"
+    assert main(["static", "column", "--set", "bc.start=hinged", "--set", "bc.end=roller",
+                 "--set", "loads.distributed_force=[3.0,0.0,0.0]", "--out", str(out)]) == 0
+    rec = json.loads((out / "summary.json").read_text())["reactions"]
+    start, end = (np.array(rec[k]["force"]) for k in ("start", "end"))
+    applied = np.array([3.0 * L, 0.0, -LOAD])
+    print(start, end, start + end + applied)
+    assert np.all(np.abs(start + end + applied) < 1e-8)
+    assert end[2] == 0.0 and start[0] == pytest.approx(end[0], rel=1e-6)

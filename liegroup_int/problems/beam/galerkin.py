@@ -201,6 +201,9 @@ class GalerkinBeamProblem(BeamBase):
         #: ``(row, point, EndLoad)`` of every loaded end and joint
         self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
             (j.a, j.point, j.load) for j in self.joints if j.load is not None)
+        #: ``(row, axis)`` of each roller end: its free position component (static analyses)
+        self.rollers = tuple(self._roller(e, kind, gs) for e, kind in zip(self.ends, (bcs.start, bcs.end))
+                             if kind == "roller")
         fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
         for e in self.ends:
             fixp[e.index] |= e.fix_position
@@ -427,11 +430,31 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ set-up
     @staticmethod
     def _end(index, point, normal, kind, load, motion, translation):
-        BeamBase.check_end_load(kind, load, normal)
+        BeamBase.check_end_load(kind, load, normal)  # a roller's are checked with its axis (_roller)
         return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged"),
                      fix_rotation=kind == "clamped", load=load, motion=motion, translation=translation)
 
+    @staticmethod
+    def _roller(e, kind, gs) -> tuple[int, int]:
+        """``(row, axis)`` of a roller end: the coordinate axis its reference tangent lies along."""
+        where = "start" if e.normal < 0 else "end"
+        tangent = gs.R0[e.point][:, 2]
+        axis = int(np.argmax(np.abs(tangent)))
+        if abs(abs(tangent[axis]) - 1.0) > 1e-9:
+            raise ValueError(f"bc.{where} = 'roller': the end's tangent {np.round(tangent, 6).tolist()} must lie "
+                             "along a coordinate axis (the roller slides along it)")
+        if np.any(np.delete(e.load.force, axis)):
+            raise ValueError(f"loads.{where}.force: a roller takes the force across its axis; give only the "
+                             f"component along axis {'xyz'[axis]}")
+        return e.index, axis
+
+    def _refuse_rollers(self) -> None:
+        if self.rollers:
+            raise ValueError("a roller end (bc.start or bc.end = 'roller') is for static and buckling analyses; "
+                             "use hinged or clamped ends for dynamics and modes")
+
     def _make_kernels(self):
+        self._refuse_rollers()
         from .kernels.galerkin import NumbaGalerkinKernels
 
         return NumbaGalerkinKernels(self)
@@ -507,6 +530,7 @@ class GalerkinBeamProblem(BeamBase):
         return self._constrain(self.mass_theta.solve(rhs, ends[self.fix_rotation]), "theta")
 
     def increment_rate(self, t: float, y: GalerkinBeamState, u: np.ndarray) -> np.ndarray:
+        self._refuse_rollers()
         if self._nb is not None:
             return self._nb.increment_rate(t, y, u)
         out = np.empty((4, self.n, 3))
@@ -585,10 +609,17 @@ class GalerkinBeamProblem(BeamBase):
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):
         """Force (spatial) and couple (material) each support exerts on its control value:
-        the residual of that row, ``mu (M v')_d - F_d`` and ``J (M W')_d - T_d``."""
-        k = self.increment_rate(t, y, np.zeros((4, self.n, 3)))
+        the residual of that row, ``mu (M v')_d - F_d`` and ``J (M W')_d - T_d``. With a roller
+        the problem is static (no accelerations): a roller takes the force across its axis and
+        the twisting couple."""
+        zero = np.zeros((4, self.n, 3))
+        k = zero if self.rollers else self.increment_rate(t, y, zero)
         F, T = self._forces(t, y, self.B0 @ y.w)
         out = {}
+        for row, axis in self.rollers:
+            f, c = -F[row], np.zeros(3)
+            f[axis], c[2] = 0.0, -T[row, 2]
+            out["start" if row == 0 else "end"] = (f, c)
         for e in self.ends:
             if e.fix_position or e.fix_rotation:
                 i = e.index
@@ -707,4 +738,5 @@ class GalerkinBeamProblem(BeamBase):
         supported rows of the weak form (variationally consistent reactions). A hinge
         takes no couple (zero)."""
         sup = self._support_loads(t, y)
-        return {e.name: (sup[e.name][0], y.R[e.point] @ sup[e.name][1]) for e in self.ends if e.fix_position}
+        return {e.name: (sup[e.name][0], y.R[e.point] @ sup[e.name][1]) for e in self.ends if e.name in sup
+                and (e.fix_position or any(row == e.index for row, _ in self.rollers))}

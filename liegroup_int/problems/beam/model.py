@@ -16,7 +16,9 @@ import numpy as np
 
 from ..errors import ParameterError
 
-END_TYPES = ("clamped", "hinged", "free")
+#: End conditions. ``roller``: the end moves along its reference tangent only and does not
+#: twist (a fork support); static and buckling analyses of the Galerkin beam only.
+END_TYPES = ("clamped", "hinged", "free", "roller")
 
 
 @dataclass(frozen=True)
@@ -407,7 +409,7 @@ class BoundaryConditions:
             if getattr(self, f"{name}_motion") is not None and getattr(self, name) != "clamped":
                 raise ParameterError(f"{name}_motion", f"a prescribed rotation needs a clamped end, not "
                                                        f"{getattr(self, name)!r}")
-            if getattr(self, f"{name}_translation") is not None and getattr(self, name) == "free":
+            if getattr(self, f"{name}_translation") is not None and getattr(self, name) in ("free", "roller"):
                 raise ParameterError(f"{name}_translation", "a prescribed displacement needs a clamped or hinged "
                                                             "end, not 'free'")
 

@@ -202,6 +202,9 @@ class BeamProblem(BeamBase):
     # ------------------------------------------------------------------ set-up
     @staticmethod
     def _end(index, normal, kind, load, l_s, motion=None, translation=None):
+        if kind == "roller":
+            raise ValueError(f"bc.{'start' if normal < 0 else 'end'} = 'roller' needs space.formulation = "
+                             "\"galerkin\" (static and buckling analyses)")
         BeamProblem.check_end_load(kind, load, normal)
         return _End(
             index=index, normal=normal, factor=C_STAR / l_s,

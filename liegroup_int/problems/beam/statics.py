@@ -95,7 +95,9 @@ class _Unknowns:
                 turns[j.b] = j.a
         self.node_of = follower
         free = [(~pb.fix_position) & (follower == np.arange(n)), (~pb.fix_rotation) & (turns == np.arange(n))]
-        idx = [(f, i, d) for i in range(n) for f in (0, 1) if free[f][i] for d in range(3)]
+        # a roller row: its position along its axis, its bending rotations (no twist)
+        kept = {(0, row): (axis,) for row, axis in pb.rollers} | {(1, row): (0, 1) for row, _ in pb.rollers}
+        idx = [(f, i, d) for i in range(n) for f in (0, 1) if free[f][i] for d in kept.get((f, i), range(3))]
         self.field, self.row, self.comp = (np.array(v, dtype=int) for v in zip(*idx)) if idx else (
             np.zeros(0, int),) * 3
         self.size = len(idx)
