@@ -7,7 +7,12 @@ dependence on the state), so statics and dynamics share one copy of the physics.
 unknowns are the free control-value increments of position and rotation vector
 (``u[0]``, ``u[1]`` of the problem's increment), applied on the Lie group with
 :meth:`GalerkinBeamProblem.action`; supported rows stay fixed and the second rows of
-rigid joints follow the first (:meth:`GalerkinBeamProblem.project_increment`).
+rigid joints follow the first (:meth:`GalerkinBeamProblem.project_increment`). At a hinge
+the second member's end rotation is the first's carried across the joint and turned by one
+unknown angle about the axis, ``exp(Theta_b) = exp(G^T Theta_a) exp(phi axis)`` with
+``G = R_a^T R_b``: the hinge stays a hinge exactly at every iterate, and the residual of
+``phi`` is the couple about the axis (the virtual work of ``dTheta_b = G^T dTheta_a +
+dphi axis``).
 
 The tangent is a forward-difference Jacobian whose columns are perturbed in groups: two
 control values whose residual rows do not overlap (basis supports farther apart than the
@@ -29,7 +34,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...groups.so3 import exp_so3, log_so3
 from .galerkin import GalerkinBeamProblem, GalerkinBeamState
+
+#: Component index of a hinge's angle among the unknowns (after the three of a rotation).
+HINGE_ANGLE = 3
 
 
 class StaticDivergence(RuntimeError):
@@ -82,22 +91,26 @@ class StaticResult:
 
 class _Unknowns:
     """The free unknowns of a problem: ``(field, row, component)`` of each (field 0:
-    position, 1: rotation vector), the column groups of the finite-difference tangent and
-    the residual's reduction onto them."""
+    position, 1: rotation vector; component :data:`HINGE_ANGLE`: a hinge's angle, on its
+    first row), the column groups of the finite-difference tangent and the residual's
+    reduction onto them."""
 
     def __init__(self, pb: GalerkinBeamProblem):
         self.pb, n = pb, pb.n
         follower = np.arange(n)  # joint rows b follow rows a: positions at every joint,
-        turns = np.arange(n)  # rotations at the rigid ones
+        turns = np.arange(n)  # rotations at the rigid ones and the hinges
         for j in pb.joints:
             follower[j.b] = j.a
-            if j.rigid:
+            if j.rigid or j.kind == "hinge":
                 turns[j.b] = j.a
         self.node_of = follower
         free = [(~pb.fix_position) & (follower == np.arange(n)), (~pb.fix_rotation) & (turns == np.arange(n))]
         # a roller row: its position along its axis, its bending rotations (no twist)
         kept = {(0, row): (axis,) for row, axis in pb.rollers} | {(1, row): (0, 1) for row, _ in pb.rollers}
         idx = [(f, i, d) for i in range(n) for f in (0, 1) if free[f][i] for d in kept.get((f, i), range(3))]
+        self.hinges = tuple(pb.hinges)
+        self.n_plain = len(idx)
+        idx += [(1, h.a, HINGE_ANGLE) for h in self.hinges]
         self.field, self.row, self.comp = (np.array(v, dtype=int) for v in zip(*idx)) if idx else (
             np.zeros(0, int),) * 3
         self.size = len(idx)
@@ -106,21 +119,43 @@ class _Unknowns:
         self.groups = _groups(self.pattern)
         self.length = float(pb.space.length)
 
-    def expand(self, x: np.ndarray) -> np.ndarray:
-        """The increment ``(4, n, 3)`` of free values ``x`` ``(size,)``."""
+    def _joint_turn(self, h, y: GalerkinBeamState) -> np.ndarray:
+        """``G = R_a^T R_b`` of hinge ``h`` at ``y``."""
+        return y.R[h.point].T @ y.R[h.point_b]
+
+    def expand(self, x: np.ndarray, y: GalerkinBeamState | None = None) -> np.ndarray:
+        """The increment ``(4, n, 3)`` of free values ``x`` ``(size,)``; with hinges, at the
+        state ``y``: exactly on the group (``exp(Theta_b) = exp(G^T Theta_a) exp(phi axis)``),
+        or linearized (``Theta_b = G^T Theta_a + phi axis``) with ``exact=False``."""
+        return self._expand(x, y, exact=True)
+
+    def linear(self, y: GalerkinBeamState | None):
+        """``expand`` linearized at ``y`` (mode shapes)."""
+        return lambda x: self._expand(x, y, exact=False)
+
+    def _expand(self, x: np.ndarray, y, exact: bool) -> np.ndarray:
         u = np.zeros((4, self.pb.n, 3))
-        u[self.field, self.row, self.comp] = x
+        k = self.n_plain
+        u[self.field[:k], self.row[:k], self.comp[:k]] = x[:k]
+        for h, phi in zip(self.hinges, x[k:]):
+            carried = self._joint_turn(h, y).T @ u[1, h.a]
+            u[1, h.b] = log_so3(exp_so3(carried) @ exp_so3(phi * h.axis)) if exact else carried + phi * h.axis
         return u
 
-    def reduce(self, F: np.ndarray, T: np.ndarray) -> np.ndarray:
+    def reduce(self, F: np.ndarray, T: np.ndarray, y: GalerkinBeamState | None = None) -> np.ndarray:
         """Free entries of the generalized forces ``F, T`` ``(n, 3)``, with each joint's
-        second rows added to its first (virtual work of the joined increments)."""
+        second rows added to its first (virtual work of the joined increments); a hinge's
+        angle takes the couple about its axis."""
         F, T = F.copy(), T.copy()
+        angles = [float(h.axis @ T[h.b]) for h in self.hinges]
         for j in self.pb.joints:
             F[j.a] += F[j.b]
             if j.rigid:
                 T[j.a] += j.Q @ T[j.b]
-        return np.stack([F, T])[self.field, self.row, self.comp]
+        for h in self.hinges:
+            T[h.a] += self._joint_turn(h, y) @ T[h.b]
+        k = self.n_plain
+        return np.concatenate([np.stack([F, T])[self.field[:k], self.row[:k], self.comp[:k]], angles])
 
     def increment_norm(self, x: np.ndarray) -> float:
         """``|(eta / L, Theta)|`` of free increments ``x``."""
@@ -171,11 +206,11 @@ class _System:
         """Free generalized forces at rest with the loads times ``lam``, ``(size,)``."""
         self.evaluations += 1
         F, T = self.pb._forces(self.t, y, self.zero_w, load_factor=lam)
-        return self.dofs.reduce(F, T)
+        return self.dofs.reduce(F, T, y)
 
     def move(self, y: GalerkinBeamState, x: np.ndarray) -> GalerkinBeamState:
         """``y`` moved by the free increments ``x`` on the group."""
-        return self.pb.action(self.dofs.expand(x), y)
+        return self.pb.action(self.dofs.expand(x, y), y)
 
     def tangent(self, y: GalerkinBeamState, lam: float, r0: np.ndarray, central: bool = False):
         """Sparse finite-difference Jacobian ``d r / d x`` (CSC), one residual evaluation
@@ -192,7 +227,7 @@ class _System:
         for group in d.groups:
             in_group = np.isin(d.row, group)
             for f in (0, 1):
-                for c in range(3):
+                for c in range(3 if f == 0 else 4):
                     sel = np.flatnonzero(in_group & (d.field == f) & (d.comp == c))
                     if sel.size == 0:
                         continue
@@ -250,7 +285,7 @@ def tangent_matrix(problem: GalerkinBeamProblem, y: GalerkinBeamState, load_fact
     y.v[:] = 0.0
     y.w[:] = 0.0
     J = system.tangent(y, load_factor, None, central=True).toarray()
-    return Tangent(J, system.dofs.expand, float(load_factor))
+    return Tangent(J, system.dofs.linear(y), float(load_factor))
 
 
 def solve_static(problem: GalerkinBeamProblem, *, load_steps: int = 10, tol: float = 1e-8, max_iter: int = 30,
@@ -332,8 +367,6 @@ def _check(problem, load_steps: int, tol: float, max_iter: int) -> None:
     if not np.any(problem.fix_position):
         raise ValueError("static needs a support: bc.start or bc.end clamped or hinged (a free beam has no "
                          "equilibrium under loads)")
-    if getattr(problem, "hinges", ()):
-        raise ValueError('static: hinge joints ([[joints]] kind = "hinge") are not supported; use the dynamics')
     if problem.moving_ends or problem.translating_ends:
         raise ValueError("static: a prescribed support motion (motion.*, translation.*) is not a static load")
     if not (isinstance(load_steps, (int, np.integer)) and load_steps >= 1):
