@@ -7,6 +7,7 @@ that stops early (blow-up) exits with code 3 after saving what it computed.
 from __future__ import annotations
 
 import argparse
+import time
 import sys
 from pathlib import Path
 
@@ -160,8 +161,13 @@ def _claim(out: Path, overwrite: bool, scene: str) -> None:
 
 
 def _load(args):
+    """The scene of ``args``; loading checks it (a large mesh builds its discretization), so a
+    load longer than a few seconds says so (``SetupNotice``)."""
+    from .runner import SetupNotice
+
     overrides = dict(parse_override(s) for s in args.overrides)
-    return load_scene(args.scene, overrides)
+    with SetupNotice(str(args.scene), enabled=not getattr(args, "quiet", False)):
+        return load_scene(args.scene, overrides)
 
 
 def _study(args) -> int:
@@ -541,10 +547,12 @@ def _run(args) -> int:
             out = args.resume
             scene_name = res.summary["scene"]
         else:
+            c0 = time.perf_counter()
             scene = _load(args)
             out = args.out if args.out is not None else Path("runs") / scene.name
             scene_name = scene.name
-            res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene))
+            res = run_scene(scene, out, quiet=args.quiet, claim=lambda d: _claim(d, args.overwrite, args.scene),
+                            load_s=time.perf_counter() - c0)
     except RunError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 130 if "interrupted" in str(exc) else 3

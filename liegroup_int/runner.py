@@ -392,16 +392,17 @@ def _install_signal_handlers(ckpt: Checkpointer):
 
 
 def run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None,
-              claim: Callable[[Path], None] | None = None) -> RunResult:
+              claim: Callable[[Path], None] | None = None, load_s: float = 0.0) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir`` (:func:`_run_scene`);
-    without ``quiet``, a line on stderr says when numba compiles (a first run)."""
+    without ``quiet``, a line on stderr says when numba compiles (a first run). ``load_s``:
+    the seconds spent loading and checking the scene before (added to the set-up time)."""
     compiles = KINDS[scene.kind].compiles
     with CompileNotice(enabled=not quiet and compiles is not None and compiles(scene)):
-        return _run_scene(scene, out_dir, quiet, resume, claim)
+        return _run_scene(scene, out_dir, quiet, resume, claim, load_s)
 
 
 def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | None = None,
-               claim: Callable[[Path], None] | None = None) -> RunResult:
+               claim: Callable[[Path], None] | None = None, load_s: float = 0.0) -> RunResult:
     """Integrate ``scene`` and write its results into ``out_dir``: start (build, checks),
     outputs, warm-up, time loop, summary, then plots.
 
@@ -446,7 +447,7 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         summary["stopped_by_event"] = end.event
     if end.status != "ok" or end.event is not None:
         summary["wall_time_s"] = loop_s
-    summary["timing"] = _timing(compile_s, t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
+    summary["timing"] = _timing(compile_s, load_s + t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
     _finish(scene, start, outs, end, out_dir, summary)
     return RunResult(out_dir, summary, outs.history)

@@ -129,3 +129,26 @@ def test_a_slow_set_up_says_so(monkeypatch, tmp_path, capsys):
     assert err.count("setting up heavy_top (more than 0.05 s") == 1
     runner.run_scene(scene, tmp_path / "slow_quiet", quiet=True)
     assert "setting up" not in capsys.readouterr().err
+
+
+def test_a_slow_scene_check_says_so_and_counts_as_set_up(monkeypatch, tmp_path, capsys):
+    """Loading a scene checks it (a large beam mesh builds its discretization there, 4.5 s
+    at n_ctrl = 2001): `run` prints the set-up line during a slow load too (threshold lowered
+    to 0.05 s, the check slowed by 0.3 s), and summary.json's `timing.setup_s` includes it."""
+    import dataclasses
+    import json
+    import time
+
+    import liegroup_int.runner as runner
+    from liegroup_int.cli import main
+    from liegroup_int.scenes import KINDS
+
+    kind = KINDS["rigid_body"]
+    slow = lambda scene, check=kind.check: (time.sleep(0.3), check(scene) if check else None)[1]  # noqa: E731
+    monkeypatch.setattr(runner, "SETUP_NOTICE_S", 0.05)
+    monkeypatch.setitem(KINDS, "rigid_body", dataclasses.replace(kind, check=slow))
+    out = tmp_path / "slow_check"
+    assert main(["run", "heavy_top", "--set", "t_end=0.01", "--set", "output.every=0.01", "--no-plots",
+                 "--out", str(out)]) == 0
+    assert capsys.readouterr().err.count("setting up heavy_top (more than 0.05 s") == 1
+    assert json.loads((out / "summary.json").read_text())["timing"]["setup_s"] >= 0.3
