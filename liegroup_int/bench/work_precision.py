@@ -31,7 +31,10 @@ Ratios against each peer run with error ``e_p`` and CPU ``t_p``, for each formul
 ours: *CPU ratio* = ``t_p`` over the CPU of our cheapest run of that formulation with
 error <= ``e_p``; *accuracy ratio* = ``e_p`` over the error of our most accurate run of
 that formulation with CPU <= ``t_p``. Both are given for PyElastica's own rod model and
-for its discretization of our continuum model.
+for its discretization of our continuum model, and both again *certified*: with the
+reference's own error bound ``b`` added to each of our errors (a run counts as at least as
+accurate when ``e + b <= e_p``; the accuracy ratio is ``e_p / (e + b)``), which holds
+however the reference errs within its bound.
 """
 
 from __future__ import annotations
@@ -344,10 +347,12 @@ def _label(r: Run) -> str:
     return f"{r.family} {r.resolution} dt={r.dt:.3g}" + ("" if r.rtol is None else f" rtol={r.rtol:g}")
 
 
-def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
+def ratios(ours: list[Run], peers: list[Run], bound: float = math.nan) -> list[dict]:
     """CPU and accuracy ratios of our runs against each finished peer run (module doc):
-    one entry per peer run and formulation of ours (in the order of ``ours``)."""
+    one entry per peer run and formulation of ours (in the order of ``ours``); with the
+    reference's error ``bound``, also the certified ratios (``*_certified``; None without)."""
     mine = [r for r in ours if r.status == "ok" and np.isfinite(r.error)]
+    b = bound if np.isfinite(bound) else None
     formulations = list(dict.fromkeys(r.formulation for r in mine))
     out = []
     for p in peers:
@@ -359,6 +364,8 @@ def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
             cheap = min(as_good, key=lambda r: r.cpu_s) if as_good else None
             within = [r for r in group if r.cpu_s <= p.cpu_s]
             best = min(within, key=lambda r: r.error) if within else None
+            sure = [r for r in group if b is not None and r.error + b <= p.error]
+            sure_cheap = min(sure, key=lambda r: r.cpu_s) if sure else None
             out.append({
                 "peer": f"{p.family} {p.resolution}", "peer_error": p.error, "peer_cpu_s": p.cpu_s,
                 "formulation": form,
@@ -368,6 +375,8 @@ def ratios(ours: list[Run], peers: list[Run]) -> list[dict]:
                 "ours_at_cpu": None if best is None else _label(best),
                 "ours_at_cpu_error": None if best is None else best.error,
                 "accuracy_ratio": None if best is None else p.error / best.error,
+                "cpu_ratio_certified": None if sure_cheap is None else p.cpu_s / sure_cheap.cpu_s,
+                "accuracy_ratio_certified": None if best is None or b is None else p.error / (best.error + b),
             })
     return out
 
@@ -396,9 +405,13 @@ class Result:
     def reference_bound(self) -> float:
         """Bound on the reference's own error: its distance to the coarser reference
         (space) plus RKMK65 at twice its step (time); NaN when neither was measured."""
-        parts = [r.error for r in (self.reference_coarse, self.reference_check)
-                 if r is not None and r.status == "ok" and np.isfinite(r.error)]
-        return float(sum(parts)) if parts else math.nan
+        return _bound(self.reference_coarse, self.reference_check)
+
+
+def _bound(coarse: Run | None, check: Run | None) -> float:
+    """The reference's error bound from its coarser twin and its time check (NaN if neither)."""
+    parts = [r.error for r in (coarse, check) if r is not None and r.status == "ok" and np.isfinite(r.error)]
+    return float(sum(parts)) if parts else math.nan
 
 
 def _say(log: Callable | None, msg: str) -> None:
@@ -584,7 +597,8 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     damping = {f"p{p} n{n} {form}": (d.damping.as_dict() if d.damping else {"refused": d.refused})
                for (p, n, form), d in built.items() if form == "mixed"}
     mine = list(ours.values())
-    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers), lam, version, note, damping, coarse)
+    bound = _bound(coarse, check)
+    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers, bound), lam, version, note, damping, coarse)
 
 
 # ----------------------------------------------------------------------------- reporting
@@ -646,17 +660,25 @@ def markdown(result: Result) -> str:
     if result.ratios:
         lines += ["", f"Ratios against PyElastica {result.peer_version}, per formulation of ours (CPU ratio: peer CPU / "
                   "CPU of our cheapest run of that formulation at least as accurate; accuracy ratio: peer error / "
-                  "error of our best run of that formulation within the peer's CPU):",
+                  "error of our best run of that formulation within the peer's CPU; in brackets, certified: with the "
+                  "reference's error bound added to ours):",
                   "", "| peer run | peer error [m] | peer CPU [s] | ours | ours at that error | CPU [s] | CPU ratio | "
                   "ours within that CPU | error [m] | accuracy ratio |",
                   "|---|---|---|---|---|---|---|---|---|---|"]
         for q in result.ratios:
             lines.append(f"| {q['peer']} | {q['peer_error']:.3e} | {q['peer_cpu_s']:.3g} | {q['formulation'] or '-'} | "
                          f"{q['ours_at_error'] or '-'} | "
-                         f"{_fmt(q['ours_at_error_cpu_s'], '.3g')} | {_fmt(q['cpu_ratio'], '.1f')} | "
-                         f"{q['ours_at_cpu'] or '-'} | {_fmt(q['ours_at_cpu_error'], '.3e')} | "
-                         f"{_fmt(q['accuracy_ratio'], '.1f')} |")
+                         f"{_fmt(q['ours_at_error_cpu_s'], '.3g')} | {_fmt(q['cpu_ratio'], '.1f')}"
+                         f"{_certified(q, 'cpu_ratio')} | {q['ours_at_cpu'] or '-'} | "
+                         f"{_fmt(q['ours_at_cpu_error'], '.3e')} | {_fmt(q['accuracy_ratio'], '.1f')}"
+                         f"{_certified(q, 'accuracy_ratio')} |")
     return "\n".join(lines) + "\n"
+
+
+def _certified(q: dict, key: str) -> str:
+    """`` (at least X)`` for a ratio whose certified value is known (``q`` from :func:`ratios`)."""
+    c = q.get(f"{key}_certified")
+    return "" if c is None or q.get(key) is None else f" (at least {c:.1f})"
 
 
 def _envelope(runs: list[Run]) -> tuple[list[float], list[float]]:

@@ -189,6 +189,21 @@ def test_ratio_rules():
     assert coarse["accuracy_ratio"] is None  # nothing of ours finished within 0.2 s
 
 
+def test_certified_ratios_add_the_reference_bound():
+    """With the reference's bound b = 1e-4: run 'a' (1e-3, 1 s) still beats the peer's 2e-3 by
+    e + b = 1.1e-3, so the certified CPU ratio is the plain one; the accuracy ratio of 'b'
+    (1e-5) is 200, certified 2e-3 / 1.1e-4 = 18.2; without a bound, no certified values."""
+    ours = [_run("RKMK4", "a", 1e-5, 1.0, 1e-3), _run("RKMK4", "b", 1e-5, 3.0, 1e-5)]
+    peers = [_run("PyElastica", "400 el", 1e-6, 10.0, 2e-3)]
+    q = ratios(ours, peers, bound=1e-4)[0]
+    assert q["cpu_ratio_certified"] == pytest.approx(10.0) and q["accuracy_ratio"] == pytest.approx(200.0)
+    assert q["accuracy_ratio_certified"] == pytest.approx(2e-3 / 1.1e-4)
+    tight = ratios(ours, peers, bound=1.5e-3)[0]  # 'a' no longer certified as good as the peer; 'b' is
+    assert tight["cpu_ratio_certified"] == pytest.approx(10.0 / 3.0)
+    plain = ratios(ours, peers)[0]
+    assert plain["cpu_ratio_certified"] is None and plain["accuracy_ratio_certified"] is None
+
+
 def test_ratios_per_formulation():
     ours = [Run("RKMK4", "a", 1e-5, "primal", cpu_s=1.0, error=1e-3),
             Run("RKMK4", "a", 1e-5, "mixed", 1e-6, cpu_s=1.2, error=1e-5),
