@@ -83,10 +83,28 @@ def test_a_hub_spun_up_by_a_torque_balances_its_angular_momentum(tmp_path):
     assert np.max(np.abs(h["energy_balance"])) < 1e-12
 
 
+def _agree_to_round_off(np_problem, y, np_rates, nb_rates, factor: float = 5.0):
+    """Per field of the rates: the backends agree to 1e-12 of the largest rate, or to
+    ``factor`` times the round-off the state's conditioning amplifies, measured as the largest
+    change of the NumPy rates when the positions are perturbed by +-1.1e-16 relative (three
+    sign patterns): the stiff axial rows amplify round-off by ``E A / (rho A h^2)``, so an
+    axial acceleration of 1e-5 carries ~1e-6 of it. Measured: the backends differ by 0.12 to
+    0.22 times that floor where it decides (numpy 2.4)."""
+    floor = np.zeros(np_rates.shape[0])
+    for seed in (3, 4, 5):
+        yp = y.copy()
+        yp.c = yp.c * (1.0 + 1.1e-16 * np.sign(np.random.default_rng(seed).standard_normal(yp.c.shape)))
+        floor = np.maximum(floor, np.max(np.abs(np_problem.vector_field(0.0, yp) - np_rates), axis=(1, 2)))
+    err = np.max(np.abs(np_rates - nb_rates), axis=(1, 2))
+    tol = np.maximum(1e-12 * np.max(np.abs(np_rates)), factor * floor)
+    print("backends:", err, "round-off floor:", floor)
+    assert np.all(err <= tol), (err, tol)
+
+
 def test_the_backends_agree_with_a_tip_body():
     """Stage rates of the tip-mass cantilever under gravity, spinning (the gyroscopic couple
     of the body): the numba kernel against the NumPy twin, to round-off."""
-    rates = []
+    rates, twins = [], []
     for backend in ("numpy", "numba"):
         sim = KINDS["beam"].build(_scene([{"at": "end", "mass": 0.2, "inertia": [1e-3, 2e-3, 3e-3]}],
                                          **{"integrator.backend": backend, "loads.gravity": [0.0, 0.0, -9.81]}))
@@ -94,7 +112,8 @@ def test_the_backends_agree_with_a_tip_body():
         y.w[:] = np.linspace(0.0, 1.0, y.w.shape[0])[:, None] * np.array([3.0, -2.0, 5.0])
         y.v[:] = np.linspace(0.0, 1.0, y.v.shape[0])[:, None] * np.array([0.1, 0.2, -0.3])
         rates.append(sim.problem.vector_field(0.0, y))
-    assert np.max(np.abs(rates[0] - rates[1])) <= 1e-12 * np.max(np.abs(rates[0]))
+        twins.append((sim.problem, y))
+    _agree_to_round_off(*twins[0], rates[0], rates[1])
     assert np.max(np.abs(rates[0][3, -1])) > 1.0  # the end's angular acceleration is not trivial
 
 
@@ -126,7 +145,7 @@ def test_a_body_at_a_frame_joint():
     f_bare = np.array([m.freq_hz for m in modal_analysis(bare.problem, 0.0, bare.y0, 4).modes])
     assert np.allclose(f_post, f_arm, rtol=1e-7) and np.all(f_post < f_bare)
     assert np.sum(sim.problem.mass_weights) == pytest.approx(np.sum(bare.problem.mass_weights) + 0.5, rel=1e-12)
-    rates = []
+    rates, twins = [], []
     for backend in ("numpy", "numba"):
         s = KINDS["beam"].build(load_scene("t_frame", {"integrator.backend": backend,
                                                        "bodies": [{"at": "post.end", "mass": 0.5,
@@ -134,6 +153,7 @@ def test_a_body_at_a_frame_joint():
         y = s.y0.copy()
         y.w[:] = np.linspace(0.0, 1.0, y.w.shape[0])[:, None] * np.array([2.0, -1.0, 3.0])
         rates.append(s.problem.vector_field(0.0, y))
-    assert np.max(np.abs(rates[0] - rates[1])) <= 1e-12 * np.max(np.abs(rates[0]))
+        twins.append((s.problem, y))
+    _agree_to_round_off(*twins[0], rates[0], rates[1])
     with pytest.raises(SceneError, match="key 'at' = 'mast.end': no \\[\\[beams\\]\\] entry named 'mast'"):
         KINDS["beam"].build(load_scene("t_frame", {"bodies": [{"at": "mast.end", "mass": 1.0}]}))
