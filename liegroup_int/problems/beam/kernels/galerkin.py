@@ -213,17 +213,17 @@ def _point_loads(d, v, w, R, out):
     return power
 
 
-@njit(cache=True, fastmath=False, _nrt=False)
-def _prescribe(b, C, rows, vals, q):
-    """Move the prescribed values ``vals[:, q]`` of ``rows`` to the right-hand side of
+@njit(cache=True, fastmath=False, inline="always")
+def _prescribe(b, C, rows, keep, at, q):
+    """Move the prescribed values ``keep[at + k, q]`` of ``rows`` to the right-hand side of
     column ``q``: ``b[:, q] -= C vals[:, q]``, then ``b[rows, q] = vals[:, q]``."""
     for k in range(rows.shape[0]):
-        x = vals[k, q]
+        x = keep[at + k, q]
         if x != 0.0:
             for j in range(b.shape[0]):
                 b[j, q] -= C[j, k] * x
     for k in range(rows.shape[0]):
-        b[rows[k], q] = vals[k, q]
+        b[rows[k], q] = keep[at + k, q]
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
@@ -363,15 +363,17 @@ def _solve(d, w, out, R, u1):
         put(keep, 4 + k, row(w, fr[k]))
         put(keep, 6 + k, row(d.loads, ALPHA + 2 * (0 if fr[k] == 0 else 1)))
     for q in range(3):
-        _prescribe(out[1], d.Cth, fr, keep[4:4 + kr], q)
-        _prescribe(out[3], d.Crot[q], fr, keep[6:6 + kr], q)
-        _prescribe(out[2], d.Cp, fp, keep[8:8 + kp], q)
+        _prescribe(out[1], d.Cth, fr, keep, 4, q)
+        _prescribe(out[3], d.Crot[q], fr, keep, 6, q)
+        _prescribe(out[2], d.Cp, fp, keep, 8, q)
     chol_solve9(d.U, d.dinv, out[2], out[1], out[3])
-    _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
-    _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
-    _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
-    for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
-        _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field)
+    if d.joint_ab.shape[0]:  # calls skipped when there is nothing to constrain (a stage's fixed cost)
+        _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
+        _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
+        _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
+    if d.hinge_S.shape[0]:
+        for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
+            _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field)
 
 
 @njit(cache=True, fastmath=False, inline="always")
