@@ -214,7 +214,7 @@ def _study(args) -> int:
         print(f"{r['run']:>4}  {r['overrides']}  {r['status']}  steps={r['steps']}  "
               f"wall={'-' if wall is None else format(wall, '.3g')} s")
     if table is not None:
-        _print_table(table)
+        _print_table(table, rows)
     print(studies.format_time_split(split))
     if no_table is not None:
         first = next((r.get("error") for r in failed if r.get("error")), None)
@@ -223,8 +223,9 @@ def _study(args) -> int:
     return 3 if failed else 0
 
 
-def _print_table(table) -> None:
-    """A convergence table, coarse to fine, and its fitted rate or why there is none."""
+def _print_table(table, rows=()) -> None:
+    """A convergence table, coarse to fine, and its fitted rate or why there is none (for a
+    step-size study, and a rate that is not the method's order, a note saying so)."""
     from . import studies
 
     if table:
@@ -242,6 +243,11 @@ def _print_table(table) -> None:
         print(f"no rate fitted: {exc}")
         return
     print(studies.format_fit(fit, table[0]["param"], table[0]["finer"]))
+    methods = {r.get("method") for r in rows if r.get("status") == "ok"}
+    if table[0]["param"] == "integrator.dt" and len(methods) == 1:
+        note = studies.order_note(fit, methods.pop())
+        if note:
+            print(note)
 
 
 def _spectrum(scene) -> int:

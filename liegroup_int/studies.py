@@ -266,7 +266,7 @@ def _row(task: StudyTask, s: Mapping, task_s: float | None = None) -> dict:
     output, plots) and ``task_s`` the time of the whole task in its process."""
     return _plain({"run": task.index, "overrides": task.overrides, "status": s["status"], "steps": s.get("steps"),
                    "rhs_evals": s.get("rhs_evals"), "wall_time_s": s.get("wall_time_s"),
-                   "t_reached": s.get("t_reached"), "final": s.get("final"), "error": None,
+                   "t_reached": s.get("t_reached"), "final": s.get("final"), "error": None, "method": s.get("method"),
                    "run_dir": task.run_dir, "timing": s.get("timing"), "task_s": task_s})
 
 
@@ -711,6 +711,26 @@ def format_fit(fit: RateFit, param: str, finer: str) -> str:
     h = param if finer == "smaller" else f"1/{param}"
     return (f"fitted rate: {fit.rate:.3f} +- {fit.stderr:.2g} (standard error of the log-log slope over "
             f"{len(fit.values)} runs; local slopes {fit.local_min:.2f} to {fit.local_max:.2f}; error ~ ({h})^rate)")
+
+
+def order_note(fit: RateFit, method: str | None) -> str | None:
+    """For a step-size study: one line when the fitted rate is not the method's order (off by
+    more than 0.5 and three standard errors), saying what that usually means; else None."""
+    if method is None:
+        return None
+    from .integrators import resolve_method
+
+    try:
+        order = resolve_method(method).order
+    except (KeyError, ValueError):
+        return None
+    if abs(fit.rate - order) <= max(0.5, 3.0 * fit.stderr):
+        return None
+    why = ("the errors are not yet in the asymptotic range: at steps near the stability limit the fastest modes, "
+           "not the method's truncation, set the error; try smaller integrator.dt values or a smoother load")
+    if fit.rate > order:
+        why = "the errors fall faster than the method's order: a smooth or special solution, or a round-off floor"
+    return f"note: the fitted rate {fit.rate:.2f} is not {method}'s order {order}: {why}"
 
 
 # ---------------------------------------------------------------------- output

@@ -127,3 +127,27 @@ def test_cli_unknown_direction_refused(capsys, tmp_path):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "--finer larger|smaller" in err and "body.mass" in err
     assert not (tmp_path / "s").exists()
+
+
+def test_a_rate_below_the_method_order_gets_a_note(capsys, tmp_path):
+    """The same cantilever study on the default quadrature: the errors shrink (a rate is
+    fitted, measured 2.10 +- 0.33) but RKMK4 is of order 4: steps near the stability limit,
+    where the fastest modes excited by the suddenly applied load set the error. The CLI says
+    so in a line under the rate."""
+    out = _converge(capsys, tmp_path, "integrator.dt", ["1e-6", "5e-7", "2.5e-7", "1.25e-7"], "t_end=0.005")
+    lines = out.splitlines()
+    rate = next(ln for ln in lines if ln.startswith("fitted rate"))
+    note = lines[lines.index(rate) + 1]
+    assert note.startswith("note: the fitted rate") and "rkmk4's order 4" in note and "asymptotic range" in note
+
+
+def test_order_note_rules():
+    """No note within 0.5 (or three standard errors) of the order; a note below or above it;
+    none for an unknown method."""
+    from liegroup_int.studies import RateFit, order_note
+
+    fit = lambda rate, se=0.05: RateFit(rate, se, rate, rate, (1, 2, 3))  # noqa: E731
+    assert order_note(fit(3.7), "rkmk4") is None and order_note(fit(2.0, 0.7), "rkmk4") is None
+    assert "not rkmk4's order 4" in order_note(fit(2.1), "rkmk4")
+    assert "faster than the method's order" in order_note(fit(5.2), "rkmk4")
+    assert order_note(fit(2.0), "no-such-method") is None and order_note(fit(2.0), None) is None
