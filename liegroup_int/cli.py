@@ -567,7 +567,9 @@ def _run(args) -> int:
         print(f"error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     s = res.summary
-    print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {s['wall_time_s']:.3g} s -> {out}")
+    resumed = s.get("resumed_from")
+    took = f"{s['wall_time_s']:.3g} s" if resumed is None else f"{s['wall_time_s']:.3g} s since the resume at t = {resumed:.6g} s"
+    print(f"{scene_name}: {s['steps']} steps, {s['rhs_evals']} rhs evals, {took} -> {out}")
     print(format_outputs(s))
     return 0
 

@@ -160,7 +160,10 @@ def test_sigkill_after_the_first_checkpoint_resumes_bitwise(tmp_path, capsys):
     assert main(["run", "heavy_top", "--quiet", "--out", str(out)] + sets) == 2
     advice = capsys.readouterr().err
     assert f"(running; checkpoint at t={t_ck:.6g} s); continue it with `liegroup-int run --resume {out}`" in advice
+    capsys.readouterr()
     assert main(["run", "--quiet", "--resume", str(out)]) == 0
+    line = capsys.readouterr().out.splitlines()[0]  # the steps are the whole run's, the time this process's
+    assert f"{round(200 / 1e-3)} steps" in line and f"since the resume at t = {t_ck:.6g} s" in line
     full = tmp_path / "full"
     assert main(["run", "heavy_top", "--quiet", "--out", str(full)] + sets) == 0
     _same_run(full, out)
