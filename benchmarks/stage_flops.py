@@ -1,8 +1,10 @@
 """Flops, ns and flop-bound ratio of one RKMK stage of the beam (numba backend).
 
-Scene: the built-in ``cantilever`` (p = 4), RKMK4, numba backend, started from the smooth
-deformed moving state of :mod:`liegroup_int.bench.beam_step` (nothing underflows to
-subnormal numbers).
+Scene: the built-in ``cantilever`` (p = 4), RKMK4, numba backend, in the formulation of
+``--formulation`` (default: the default, Galerkin), started from the smooth deformed moving
+state of :mod:`liegroup_int.bench.beam_step` (nothing underflows to subnormal numbers).
+"Points" are the collocation points (``n_ctrl``) of collocation and the quadrature points
+of the Galerkin form (its stage loops run over them).
 
 1. **Flop model, read from the compiled code** (:mod:`liegroup_int.bench.asm_flops`):
    the engine's ``rate`` and ``action`` kernels (``problem.compiled_kernels()``, the
@@ -45,6 +47,7 @@ def _parse():
     ap.add_argument("--batch", type=float, default=0.15, help="minimum seconds per timed batch")
     ap.add_argument("--threads", default="1", help="BLAS threads (set before NumPy is imported)")
     ap.add_argument("--ghz", type=float, default=2.6, help="core clock for the flop bounds")
+    ap.add_argument("--formulation", default="galerkin", choices=("primal", "mixed", "galerkin"))
     return ap.parse_args()
 
 
@@ -68,9 +71,14 @@ def op_cells(ops) -> list:
     return [ops.add, ops.mul, ops.fma, ops.div, ops.sqrt, libm, ops.packed, ops.flops]
 
 
-def flop_model(n: int):
+def points(pb) -> int:
+    """The points a stage loops over: quadrature points (Galerkin) or collocation points."""
+    return int(pb.m) if pb.formulation == "galerkin" else int(pb.n)
+
+
+def flop_model(n: int, formulation: str):
     """Kernel counts of the engine's rate and action kernels (static: independent of n)."""
-    pb = cantilever(n)
+    pb = cantilever(n, formulation=formulation)
     args = engine_args(pb.compiled_kernels(), start_state(pb))
     kernels = pb.compiled_kernels().kernels
     return [kernel_count(name, getattr(kernels, name), args[name]) for name in ("rate", "action")]
@@ -95,18 +103,18 @@ def print_model(counts) -> int:
 
 def measure(n: int, args, flops: int) -> list:
     """One table row: step and call timings at ``n_ctrl = n`` and the derived rates."""
-    pb = cantilever(n)
-    y, dt = start_state(pb), step_dt(n)
+    pb = cantilever(n, formulation=args.formulation)
+    y, dt, npt = start_state(pb), step_dt(n), points(pb)
     fused, _, _ = time_steps(pb, y, dt, args.batch, args.repeats)
     generic, _, _ = time_steps(pb, y, dt, args.batch, args.repeats, monitor=no_monitor)
     u = 1e-3 * dt * pb.increment_rate(0.0, y, pb.zero_increment(y))
     t_act = best_of(lambda: pb.action(u, y), args.repeats, args.batch / 3).seconds
     t_rate = best_of(lambda: pb.increment_rate(dt, y, u), args.repeats, args.batch / 3).seconds
-    ns = fused / (STAGES * n) * 1e9
+    ns = fused / (STAGES * npt) * 1e9
     gflops = flops / ns
-    return [n, f"{fused * 1e6:.1f}", f"{ns:.1f}", f"{gflops:.2f}", f"{100 * gflops / (4 * args.ghz):.0f}",
-            f"{100 * gflops / (16 * args.ghz):.0f}", f"{generic / (STAGES * n) * 1e9:.0f}",
-            f"{t_act / n * 1e9:.1f}", f"{t_rate / n * 1e9:.1f}"]
+    return [n, npt, f"{fused * 1e6:.1f}", f"{ns:.1f}", f"{gflops:.2f}", f"{100 * gflops / (4 * args.ghz):.0f}",
+            f"{100 * gflops / (16 * args.ghz):.0f}", f"{generic / (STAGES * npt) * 1e9:.0f}",
+            f"{t_act / npt * 1e9:.1f}", f"{t_rate / npt * 1e9:.1f}"]
 
 
 def main(args) -> None:
@@ -115,14 +123,14 @@ def main(args) -> None:
     sizes = [31] if args.quick else args.sizes
     if args.quick:
         args.repeats, args.batch = 1, 0.02
-    print(f"# stage flops: cantilever p=4, RKMK4, numba backend; python {platform.python_version()}, numpy "
+    print(f"# stage flops: cantilever p=4, RKMK4, {args.formulation}, numba backend; python {platform.python_version()}, numpy "
           f"{np.__version__}, numba {numba.__version__}, {platform.machine()}, {os.cpu_count()} cpus, "
           f"load average {os.getloadavg()[0]:.2f}\n")
     c0 = time.process_time()
-    flops = print_model(flop_model(sizes[0]))
+    flops = print_model(flop_model(sizes[0], args.formulation))
     print(f"\n(model: {time.process_time() - c0:.1f} s CPU to compile and count)\n")
     print(f"### Timing (process CPU, best of {args.repeats} batches >= {args.batch} s; bounds at {args.ghz} GHz)\n")
-    print(markdown(["n_ctrl", "fused step [us]", "fused ns/stage/point", "GFLOP/s (static count)",
+    print(markdown(["n_ctrl", "points", "fused step [us]", "fused ns/stage/point", "GFLOP/s (static count)",
                     "% scalar-FMA bound (static count)", "% AVX2 bound (static count)", "generic ns/stage/point",
                     "action call ns/point", "rate call ns/point"], [measure(n, args, flops) for n in sizes]))
 
