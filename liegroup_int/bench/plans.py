@@ -47,7 +47,8 @@ class Plan:
     time_study : (int, int)
         ``(degree, n_ctrl)`` of the time study (primal).
     methods : tuple of str
-        Fixed-step methods.
+        Fixed-step methods: RKMK tableaux, and splitting compositions (``strang``: kick-drift-kick
+        leapfrog), which run on the Galerkin formulation only.
     dt_fractions : tuple of float
         Fractions of each method's stable step in the time study.
     adaptive : tuple of str
@@ -71,7 +72,7 @@ class Plan:
     reference_formulation: str = "galerkin"
     formulations: tuple[str, ...] = ("primal", "mixed", "galerkin")
     time_study: tuple[int, int] = (4, 31)
-    methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65")
+    methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65", "strang")
     dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
     adaptive: tuple[str, ...] = ("rkmk65",)
     rtols: tuple[float, ...] = (1e-5, 1e-7, 1e-9)
@@ -139,15 +140,15 @@ PLANS: dict[str, Plan] = {
 #: Short versions: the same comparisons in about a minute.
 QUICK: dict[str, Plan] = {
     "cantilever": replace(PLANS["cantilever"], t_end=0.002, reference=(6, 31), discretizations=((4, 21), (4, 31)),
-                          time_study=(4, 21), methods=("rkmk3", "rkmk4"), dt_fractions=(1.0, 0.5, 0.25),
+                          time_study=(4, 21), methods=("rkmk3", "rkmk4", "strang"), dt_fractions=(1.0, 0.5, 0.25),
                           rtols=(1e-6, 1e-8),
                           peer_elements=(50, 100), peer_linear=False, budget_s=20.0),
     "pendulum": replace(PLANS["pendulum"], t_end=0.1, reference=(6, 41), discretizations=((4, 21), (4, 31)),
-                        time_study=(4, 21), methods=("rkmk3", "rkmk4"), dt_fractions=(1.0, 0.5, 0.25),
+                        time_study=(4, 21), methods=("rkmk3", "rkmk4", "strang"), dt_fractions=(1.0, 0.5, 0.25),
                         rtols=(1e-6, 1e-8),
                         peer_elements=(50, 100), peer_linear=False, budget_s=20.0),
     "spinning_helix": replace(PLANS["spinning_helix"], t_end=0.1, reference=(6, 41),
-                              discretizations=((4, 21), (4, 31)), time_study=(4, 21), methods=("rkmk3", "rkmk4"),
+                              discretizations=((4, 21), (4, 31)), time_study=(4, 21), methods=("rkmk3", "rkmk4", "strang"),
                               dt_fractions=(1.0, 0.5, 0.25), rtols=(1e-6, 1e-8),
                               peer_elements=(50, 100), peer_linear=False, budget_s=20.0),
 }

@@ -8,7 +8,7 @@ from .observers import DiagnosticsRecorder, Observers, StateRecorder
 from .problem import ActionProblem, GroupProblem, Problem
 from .result import BlowUpError, IntegrationError, Solution, Stats, StepSizeError
 from .spectrum import GrowthReport, ModalReport, Mode, eigenvalues, growth_check, jacobian, modal_analysis, spectral_radius
-from .stepsize import StableStep, stable_step
+from .stepsize import StableStep, stable_split_step, stable_step
 from .rkmk import combine, compute_stages, error_estimate, error_norm, rkmk_step
 
 __all__ = [
@@ -16,5 +16,5 @@ __all__ = [
     "METHODS", "resolve_method", "is_adaptive", "StateRecorder", "DiagnosticsRecorder", "Observers",
     "Problem", "GroupProblem", "ActionProblem", "Solution", "Stats", "IntegrationError", "BlowUpError", "StepSizeError",
     "combine", "eigenvalues", "growth_check", "GrowthReport", "jacobian", "spectral_radius", "modal_analysis",
-    "ModalReport", "Mode", "StableStep", "stable_step", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
+    "ModalReport", "Mode", "StableStep", "stable_split_step", "stable_step", "compute_stages", "error_estimate", "error_norm", "rkmk_step",
 ]

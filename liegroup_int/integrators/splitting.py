@@ -1,9 +1,11 @@
 """The time loop of splitting methods: symmetric compositions of a problem's own
 symmetric second-order splitting (:class:`~liegroup_int.tableaux.composition.Composition`).
 
-A problem that has exactly integrable flows offers ``split_steps(y, h, gammas, n)``: ``n``
-steps of length ``h`` of the composition with coefficients ``gammas`` (a compiled loop in
-the plugin, e.g. :meth:`~liegroup_int.problems.rigid_body.RigidBodyProblem.split_steps`).
+A problem that has a symmetric second-order splitting offers ``split_steps(y, h, gammas, n,
+t)``: ``n`` steps of length ``h`` from time ``t`` of the composition with coefficients
+``gammas`` (a compiled loop in the plugin: the rigid body's exact flows,
+:meth:`~liegroup_int.problems.rigid_body.RigidBodyProblem.split_steps`; the Galerkin beam's
+kick-drift-kick, :meth:`~liegroup_int.problems.beam.galerkin.GalerkinBeamProblem.split_steps`).
 This driver lands on the output times with whole steps: every output time must be a
 multiple of ``dt`` from ``t0`` (splitting methods have no continuous extension here).
 """
@@ -19,6 +21,12 @@ from .result import BlowUpError, Stats
 
 #: How far an output time may sit from a whole number of steps, in steps.
 GRID_TOL = 1e-9
+
+
+def _finite(y) -> bool:
+    """Every value of a state finite (an array, or a state with ``arrays()``)."""
+    arrays = y.arrays().values() if hasattr(y, "arrays") else (y,)
+    return all(np.all(np.isfinite(a)) for a in arrays)
 
 
 def step_counts(t0: float, t_out: np.ndarray, dt: float) -> np.ndarray:
@@ -50,13 +58,14 @@ def integrate_composition(problem, comp: Composition, t_span: tuple[float, float
     if t_out[-1] < t_end:
         t_out = np.append(t_out, t_end)
     counts = step_counts(t0, t_out, dt)
-    stats, y, done, clock = Stats(), np.asarray(y0, dtype=float), 0, time.perf_counter()
+    stats, y, done, clock = Stats(), (y0 if hasattr(y0, "arrays") else np.asarray(y0, dtype=float)), 0, \
+        time.perf_counter()
     if observer is not None:
         observer(t0, y)
     for t, n in zip(t_out, counts):
         if n > done:
-            y = problem.split_steps(y, dt, comp.gammas_f, int(n - done))
-            if not np.all(np.isfinite(y)):
+            y = problem.split_steps(y, dt, comp.gammas_f, int(n - done), t=t0 + done * dt)
+            if not _finite(y):
                 raise BlowUpError(f"non-finite state before t = {t:g}", float(t), int(n))
             done = int(n)
         if observer is not None and t > t0:

@@ -68,3 +68,14 @@ def stable_step(tab: ButcherTableau, lam_max: float, duration: float, safety: fl
     warning = (f"{tab.name} is unstable on the imaginary axis (|R(iy)| > 1 for every y > 0); "
                f"dt chosen so the fastest mode grows by at most {growth_budget:g}x over {duration:g} s")
     return StableStep(y / lam_max, y, "growth budget", warning)
+
+
+def stable_split_step(comp, lam_max: float, safety: float = SAFETY) -> StableStep:
+    """Step of a symmetric composition ``comp`` of a kick-drift-kick (Stormer-Verlet)
+    splitting for an undamped problem whose linearized spectrum lies on the imaginary axis
+    with largest magnitude ``lam_max``: each substep of length ``gamma h`` is stable while
+    ``|gamma| h lam_max < 2``, so ``dt = safety * 2 / (max |gamma| lam_max)``."""
+    if not lam_max > 0:
+        raise ValueError(f"stable_split_step: need lam_max > 0, got {lam_max!r}")
+    y = safety * 2.0 / float(max(abs(g) for g in comp.gammas_f))
+    return StableStep(y / lam_max, y, "kick-drift-kick limit", None)

@@ -174,10 +174,10 @@ class RigidBodyProblem(GroupProblem):
 
         return compiled_problem(self.body, SPACE)
 
-    def split_steps(self, y: np.ndarray, h: float, gammas: np.ndarray, n: int) -> np.ndarray:
+    def split_steps(self, y: np.ndarray, h: float, gammas: np.ndarray, n: int, t: float = 0.0) -> np.ndarray:
         """``n`` steps of length ``h`` of the symmetric composition ``gammas`` of the body's
         Strang splitting (:mod:`.rigid_body_splitting`: symplectic), from ``y`` ``(..., 12)``;
-        a new array."""
+        a new array (autonomous: ``t`` unused)."""
         if not self._plain():
             raise ValueError("splitting methods integrate the rigid body's own dynamics; this problem overrides "
                              "them (use an RKMK method)")

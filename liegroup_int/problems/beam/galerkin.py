@@ -606,6 +606,29 @@ class GalerkinBeamProblem(BeamBase):
     def rotation_angle(self, u: np.ndarray) -> float:
         return float(np.max(angle(self.B0 @ u[1])))
 
+    # ------------------------------------------------------------------ splitting methods
+    def split_steps(self, y: GalerkinBeamState, h: float, gammas: np.ndarray, n: int,
+                    t: float = 0.0) -> GalerkinBeamState:
+        """``n`` steps of length ``h`` from ``(t, y)`` of the symmetric composition ``gammas``
+        of kick-drift-kick (Stormer-Verlet; compiled: :func:`.kernels.galerkin.split_steps`),
+        for :func:`~liegroup_int.integrators.integrate` with a splitting method (``strang``,
+        ``yoshida4``, ``yoshida6``). The drift is exact on the group; a kick takes the stage
+        accelerations, so the composition is symmetric where they do not depend on the
+        velocities. The gyroscopic couple and Kelvin-Voigt damping do, which leaves order 2
+        whatever the composition's order."""
+        self._refuse_rollers()
+        cp = self.__dict__.get("_split_data") or self.compiled_kernels()  # built once: a call per output time
+        self._split_data = cp
+        if cp is None:
+            raise ValueError('splitting methods run the compiled kernels: use integrator.backend = "numba" and '
+                             "load profiles the kernels evaluate (no Python callables)")
+        from .kernels.galerkin import split_steps
+
+        ys = tuple(np.array(a, dtype=float) for a in cp.pack(y))
+        work = tuple(np.empty_like(a) for a in ys)
+        split_steps(cp.data, ys, work, np.asarray(gammas, dtype=float), float(h), int(n), float(t))
+        return cp.unpack(ys)
+
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):
         """Force (spatial) and couple (material) each support exerts on its control value:

@@ -472,6 +472,51 @@ def engine_angle(data, u):
 
 
 ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, engine_angle, 5)
+
+
+# ====================================================================== splitting
+@njit(cache=True, inline="always")
+def _kick(y, acc, h):
+    """Velocities ``v, W`` of ``y`` moved by ``h`` times the accelerations ``acc[2], acc[3]``."""
+    v, w = y[1], y[2]
+    for j in range(v.shape[0]):
+        for q in range(3):
+            v[j, q] += h * acc[2, j, q]
+            w[j, q] += h * acc[3, j, q]
+
+
+@njit(cache=True)
+def split_steps(data, y, y2, gammas, h, n, t):
+    """``n`` steps of length ``h`` from ``(t, y)`` of the symmetric composition ``gammas`` of
+    kick-drift-kick (Stormer-Verlet): a kick moves ``v, W`` by the accelerations of the stage
+    rates at ``(t, y)``; a drift moves the configuration by the increment ``(h v, h W, 0, 0)``
+    (``Theta' = W`` at a zero increment) through the action, exactly on the group. The
+    accelerations at the end of a substep serve the next one's first kick. ``y`` (the
+    result) and ``y2`` (work) are states of the compiled engine; returns the rate
+    evaluations."""
+    m = y[1].shape[0]
+    u, acc = np.zeros((4, m, 3)), np.empty((4, m, 3))
+    zero = np.zeros((4, m, 3))
+    a, b = y, y2
+    engine_rate(data, t, a, zero, acc)
+    evals, odd = 1, False
+    for _ in range(n):
+        for g in gammas:
+            hg = g * h
+            _kick(a, acc, 0.5 * hg)
+            for j in range(m):
+                for q in range(3):
+                    u[0, j, q], u[1, j, q] = hg * a[1][j, q], hg * a[2][j, q]
+            engine_action(data, u, a, b)
+            a, b, odd = b, a, not odd
+            t += hg
+            engine_rate(data, t, a, zero, acc)
+            evals += 1
+            _kick(a, acc, 0.5 * hg)
+        ad.engine_end_step(data, a)
+    if odd:  # an odd number of drifts: the result is in the work state
+        ad._copy_state5(data, a, y)
+    return evals
 STATE_FIELDS = ("c", "v", "w", "R", "K")
 
 
