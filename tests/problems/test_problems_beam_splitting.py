@@ -110,8 +110,13 @@ def test_energy_error_over_ten_seconds(pendulum):
 def test_splitting_needs_the_compiled_kernels_and_no_roller():
     """One-line refusals: the NumPy backend (the loop is compiled), and a roller end."""
     twin = problem(load_scene("pendulum", {"integrator.backend": "numpy"}))
-    with pytest.raises(ValueError, match='integrator.backend = "numba"'):
+    with pytest.raises(ValueError, match='integrator.backend = "numba"') as err:
         twin.split_steps(twin.initial_state(), 1e-5, COMPOSITIONS["strang"].gammas_f, 1)
+    assert "\n" not in str(err.value)
+    column = problem(load_scene("column", {"bc.start": "hinged", "bc.end": "roller"}))
+    with pytest.raises(ValueError, match="roller end .* static and buckling analyses") as err:
+        column.split_steps(column.initial_state(), 1e-5, COMPOSITIONS["strang"].gammas_f, 1)
+    assert "\n" not in str(err.value)
 
 
 def test_stable_split_step_is_the_substeps_limit():
