@@ -27,9 +27,9 @@ import numpy as np
 
 from .integrators import GrowthReport, IntegrationError
 from .integrators.spectrum import GROWTH_THRESHOLD
-from .integrators.stepsize import SAFETY
+from .integrators.stepsize import SAFETY, step_limit
 from .scenes import Scene, SceneError
-from .tableaux import imaginary_axis_growth, imaginary_axis_limit
+from .tableaux import imaginary_axis_growth
 
 #: A weakly unstable method (no imaginary-axis segment) is refused when its fastest mode
 #: would grow by more than this factor over the run at the given step.
@@ -57,7 +57,7 @@ def check_step(scene: Scene, stab, tab, dt: float, t0: float, y0) -> dict:
     lam = float(stab.spectral_radius(t0, y0))
     if not lam > 0:
         return {"lambda_max": lam}
-    limit = imaginary_axis_limit(tab)
+    limit = step_limit(tab)
     where = f"{scene.source}: key 'integrator.dt' = {dt:g} s"
     if limit > 0:
         stable = limit / lam
@@ -189,7 +189,7 @@ def diagnose(scene: Scene, sim, tab, dt: float | None, t: float, y) -> str:
         return ""
     try:
         lam = float(stab.spectral_radius(t, y))
-        limit = imaginary_axis_limit(tab)
+        limit = step_limit(tab)
         if dt is not None and lam > 0 and limit > 0 and dt * lam > limit:
             return (f"cause: the step is beyond the stability limit at t={t:.6g} (|lambda|max = {lam:.4g} 1/s, "
                     f"stable dt {limit / lam:.3g} s): reduce dt or use integrator.dt = \"auto\"")

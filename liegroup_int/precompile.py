@@ -60,7 +60,7 @@ def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
     """Build ``scene_name`` with ``overrides``, run its start-up checks and one throw-away
     step of its compiled loop; returns the seconds it took (compilation or cache loads)."""
     from .guards import start_checks
-    from .integrators import resolve_method
+    from .integrators import resolve_scheme
     from .runner import warm_up
     from .scenes import KINDS, load_scene, parse_override
 
@@ -69,7 +69,7 @@ def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
     sim = KINDS[scene.kind].build(scene)
     spec = scene.integrator
     dt = sim.info["dt_auto"] if spec.dt == "auto" else spec.dt
-    tab = resolve_method(spec.method)
+    tab = resolve_scheme(spec.method)
     start_checks(scene, sim, tab, dt, 0.0, sim.y0)
     warm_up(sim.problem, tab, 0.0, sim.y0, dt)
     return time.perf_counter() - c

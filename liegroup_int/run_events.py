@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 
 from .integrators import integrate
-from .integrators.methods import is_commutator_free
+from .integrators.methods import is_commutator_free, is_splitting
 from .scenes import SceneError
 from .scenes.scene import EventSpec, Scene
 
@@ -57,7 +57,7 @@ class EventWatcher:
     ``{"name", "t", "terminal"}``."""
 
     def __init__(self, scene: Scene, sim, tab, dt, observer: Callable):
-        if scene.events and is_commutator_free(tab):
+        if scene.events and (is_commutator_free(tab) or is_splitting(tab)):
             raise SceneError(f"{scene.source}: key 'events': locating events needs an RKMK method (dense output), "
                              f"not {tab.name!r}")
         columns = sim.info.get("columns") or {}

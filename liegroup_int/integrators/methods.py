@@ -1,15 +1,19 @@
-"""Named RKMK methods: the tableau registry, addressed by method name.
+"""Named methods: the tableau registry, addressed by method name, and the splitting
+compositions.
 
 A method is registered once, as a tableau constant with its ``method`` name in
 :mod:`liegroup_int.tableaux.methods`; :data:`METHODS` and :func:`resolve_method` are
-derived from it, so scenes, the CLI and ``integrate`` accept the same names.
+derived from it, so scenes, the CLI and ``integrate`` accept the same names. The
+symplectic splitting compositions (``strang``, ``yoshida4``, ``yoshida6``,
+:data:`~liegroup_int.tableaux.composition.COMPOSITIONS`) are the other kind of method:
+:func:`resolve_scheme` takes either.
 """
 
 from __future__ import annotations
 
-from ..tableaux import CF_REGISTRY
+from ..tableaux import CF_REGISTRY, COMPOSITIONS
 from ..tableaux import REGISTRY as TABLEAUX
-from ..tableaux import ButcherTableau, resolve
+from ..tableaux import ButcherTableau, Composition, resolve
 
 #: RKMK method name -> tableau name (``"rkmk4" -> "rk4"``). On R^n problems they are
 #: classical RK.
@@ -33,3 +37,19 @@ def is_commutator_free(tab) -> bool:
     (:mod:`liegroup_int.tableaux.commutator_free`): the generic fixed-step loop runs it, the
     compiled engine and the adaptive driver do not."""
     return getattr(tab, "kind", "") == "commutator_free"
+
+
+def resolve_scheme(method: "str | ButcherTableau | Composition") -> "ButcherTableau | Composition":
+    """The splitting composition of a name in :data:`COMPOSITIONS` (or a composition),
+    else the tableau of :func:`resolve_method`."""
+    if isinstance(method, Composition):
+        return method
+    if isinstance(method, str) and method in COMPOSITIONS:
+        return COMPOSITIONS[method]
+    return resolve_method(method)
+
+
+def is_splitting(scheme) -> bool:
+    """Whether ``scheme`` is a splitting composition (fixed steps on the problem's own
+    ``split_steps``, :mod:`liegroup_int.integrators.splitting`)."""
+    return isinstance(scheme, Composition)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..tableaux import ButcherTableau, imaginary_axis_growth, imaginary_axis_limit
+from ..tableaux import ButcherTableau, Composition, imaginary_axis_growth, imaginary_axis_limit
 
 #: Fraction of the imaginary-axis stability limit used by ``dt = "auto"``.
 SAFETY = 0.8
@@ -35,7 +35,16 @@ class StableStep:
     warning: str | None
 
 
-def stable_step(tab: ButcherTableau, lam_max: float, duration: float, safety: float = SAFETY,
+def step_limit(scheme) -> float:
+    """Largest ``|lambda| dt`` of an undamped mode the method keeps bounded: the tableau's
+    imaginary-axis limit (0 when it has none), or for a splitting composition of
+    kick-drift-kick substeps ``2 / max |gamma|``."""
+    if isinstance(scheme, Composition):
+        return 2.0 / float(max(abs(g) for g in scheme.gammas_f))
+    return imaginary_axis_limit(scheme)
+
+
+def stable_step(tab: "ButcherTableau | Composition", lam_max: float, duration: float, safety: float = SAFETY,
                 growth_budget: float = GROWTH_BUDGET) -> StableStep:
     """Step for an undamped problem whose linearized spectrum lies on the imaginary axis
     with largest magnitude ``lam_max``.
@@ -44,10 +53,13 @@ def stable_step(tab: ButcherTableau, lam_max: float, duration: float, safety: fl
     ``y*`` computed from the stability polynomial. Methods with ``y* = 0`` amplify every
     undamped mode by ``|R(i y)| > 1`` per step; for them ``y`` is the largest value with
     ``|R(i y)|^(duration lam_max / y) <= growth_budget``, i.e. the highest mode grows by at
-    most ``growth_budget`` over the run, and a warning says so.
+    most ``growth_budget`` over the run, and a warning says so. A splitting composition
+    gets :func:`stable_split_step`.
     """
     if not (lam_max > 0 and duration > 0):
         raise ValueError(f"stable_step: need lam_max > 0 and duration > 0, got {lam_max!r}, {duration!r}")
+    if isinstance(tab, Composition):
+        return stable_split_step(tab, lam_max, safety)
     limit = imaginary_axis_limit(tab)
     if limit > 0:
         y = safety * limit
@@ -77,5 +89,5 @@ def stable_split_step(comp, lam_max: float, safety: float = SAFETY) -> StableSte
     ``|gamma| h lam_max < 2``, so ``dt = safety * 2 / (max |gamma| lam_max)``."""
     if not lam_max > 0:
         raise ValueError(f"stable_split_step: need lam_max > 0, got {lam_max!r}")
-    y = safety * 2.0 / float(max(abs(g) for g in comp.gammas_f))
+    y = safety * step_limit(comp)
     return StableStep(y / lam_max, y, "kick-drift-kick limit", None)

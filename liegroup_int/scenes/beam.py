@@ -775,7 +775,27 @@ def check(scene: Scene) -> None:
     if "joint_reactions" in scene.output.quantities and not (pb.formulation == "galerkin" and pb.joints):
         raise SceneError(f"{scene.source}: key 'output.quantities': 'joint_reactions' needs a frame's joints "
                          "([[beams]] or [[joints]]) and space.formulation = \"galerkin\"")
+    _check_splitting(scene, pb)
     _checked = (scene, pb)
+
+
+def _check_splitting(scene: Scene, pb) -> None:
+    """A splitting method (kick-drift-kick) needs the Galerkin formulation's compiled
+    kernels."""
+    from ..integrators import is_splitting, resolve_scheme
+
+    method = scene.integrator.method
+    if not is_splitting(resolve_scheme(method)):
+        return
+    where = f"{scene.source}: key 'integrator.method' = {method!r}"
+    if pb.formulation != "galerkin":
+        raise SceneError(f"{where}: splitting methods need space.formulation = \"galerkin\" (a constant mass matrix; "
+                         f"this is {pb.formulation!r}): use an RKMK method (rkmk4) here")
+    if scene["integrator.backend"] != "numba":
+        raise SceneError(f"{where}: splitting methods run the compiled kernels: use integrator.backend = \"numba\"")
+    if pb.tau > 0.0 or scene["material.kelvin_voigt"] not in ("auto", 0.0):
+        raise SceneError(f"{where}: splitting methods are for undamped problems (material.kelvin_voigt = "
+                         f"{scene['material.kelvin_voigt']!r}): use an RKMK method (rkmk4) with damping")
 
 
 def _point_rows(pb: BeamProblem, y0: BeamState, fractions) -> np.ndarray:
@@ -885,13 +905,14 @@ class ShapeRecorder:
 
 def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
     """``integrator.dt = "auto"``: spectral radius at the initial state times the method's
-    imaginary-axis stability limit, with a safety factor (integrators/stepsize.py)."""
+    imaginary-axis stability limit (a splitting method's kick-drift-kick limit), with a
+    safety factor (integrators/stepsize.py)."""
     import sys
 
-    from ..integrators import resolve_method, spectral_radius, stable_step
+    from ..integrators import resolve_scheme, spectral_radius, stable_step
 
     lam = spectral_radius(pb, 0.0, y0)
-    step = stable_step(resolve_method(scene.integrator.method), lam, scene.t_end)
+    step = stable_step(resolve_scheme(scene.integrator.method), lam, scene.t_end)
     if step.warning:
         print(f"warning: {scene.source}: {step.warning}", file=sys.stderr)
     return {"dt_auto": step.dt, "lambda_max": lam, "lambda_dt": step.y, "dt_rule": step.rule}

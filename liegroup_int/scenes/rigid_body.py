@@ -56,9 +56,9 @@ def compiles(scene: Scene) -> bool:
     spec = scene.integrator
     if not isinstance(spec.dt, float):
         return True
-    from ..integrators import resolve_method
+    from ..integrators import resolve_scheme
 
-    return scene.t_end / spec.dt * resolve_method(spec.method).stages >= NUMPY_BELOW_STAGES
+    return scene.t_end / spec.dt * resolve_scheme(spec.method).stages >= NUMPY_BELOW_STAGES
 
 
 def build(scene: Scene) -> Simulation:

@@ -8,8 +8,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Callable, Mapping
 
-from ..integrators import resolve_method
-from ..tableaux import NAMES
+from ..integrators import is_splitting, resolve_scheme
+from ..tableaux import COMPOSITIONS, NAMES
 from .schema import REQUIRED, Key, SceneError, flatten, non_negative, positive, read_toml, resolve_keys
 
 
@@ -275,13 +275,14 @@ def check_sparse_every(source: str, values: Mapping[str, Any]) -> None:
 
 
 def common_keys(kind: ProblemKind) -> dict[str, Key]:
-    method_names = tuple(sorted(NAMES))
+    method_names = tuple(sorted(NAMES)) + tuple(COMPOSITIONS)
     keys = [
         Key("name", "str", "", "scene name (defaults to the file name)"),
         Key("description", "str", "", "one line shown by `liegroup-int scenes`"),
         Key("problem", "str", REQUIRED, "problem kind", choices=tuple(sorted(KINDS))),
         Key("t_end", "float", REQUIRED, "simulated time span", "s", positive),
-        Key("integrator.method", "str", "rkmk4", "RKMK method", choices=method_names),
+        Key("integrator.method", "str", "rkmk4", "RKMK method, or a symplectic splitting (strang, yoshida4, yoshida6: "
+            "fixed steps; beams: the Galerkin formulation)", choices=method_names),
         Key("integrator.dt", "float_or_auto", None, 'fixed step; "auto" (beams: stable step); "none" to use rtol/atol', "s", positive),
         Key("integrator.rtol", "float", None, "relative tolerance (adaptive pairs)", "", positive),
         Key("integrator.atol", "float", None, "absolute tolerance (adaptive pairs)", "", positive),
@@ -371,13 +372,16 @@ def build_scene(given: Mapping[str, Any], source: str, default_name: str) -> Sce
     kind = KINDS[kind_name]
     keys = {**common_keys(kind), **kind.keys}
     v = resolve_keys(keys, given, source)
-    method = resolve_method(v["integrator.method"])
+    method = resolve_scheme(v["integrator.method"])
     dt, rtol, atol = v["integrator.dt"], v["integrator.rtol"], v["integrator.atol"]
+    if is_splitting(method) and dt is None:
+        raise SceneError(f"{source}: key 'integrator.method' = {v['integrator.method']!r} is a splitting method: give "
+                         "a fixed step (integrator.dt, or \"auto\"), not rtol/atol")
     if dt is None and rtol is None and atol is None:
         raise SceneError(f"{source}: key 'integrator.dt' is missing: give a step (or rtol/atol for an adaptive pair)")
     if dt is not None and (rtol is not None or atol is not None):
         raise SceneError(f"{source}: keys 'integrator.dt' and 'integrator.rtol/atol' both given: choose fixed or adaptive stepping")
-    if dt is None and method.b_hat is None:
+    if dt is None and getattr(method, "b_hat", None) is None:
         raise SceneError(
             f"{source}: key 'integrator.method' = {v['integrator.method']!r} has no embedded pair: "
             "adaptive stepping (rtol/atol) needs rkmk32, rkmk45 or rkmk65"

@@ -608,15 +608,20 @@ class GalerkinBeamProblem(BeamBase):
 
     # ------------------------------------------------------------------ splitting methods
     def split_steps(self, y: GalerkinBeamState, h: float, gammas: np.ndarray, n: int,
-                    t: float = 0.0) -> GalerkinBeamState:
+                    t: float = 0.0, quadrature: np.ndarray | None = None) -> GalerkinBeamState:
         """``n`` steps of length ``h`` from ``(t, y)`` of the symmetric composition ``gammas``
         of kick-drift-kick (Stormer-Verlet; compiled: :func:`.kernels.galerkin.split_steps`),
         for :func:`~liegroup_int.integrators.integrate` with a splitting method (``strang``,
         ``yoshida4``, ``yoshida6``). The drift is exact on the group; a kick takes the stage
         accelerations, so the composition is symmetric where they do not depend on the
-        velocities. The gyroscopic couple and Kelvin-Voigt damping do, which leaves order 2
-        whatever the composition's order."""
+        velocities. The gyroscopic couple does, which leaves order 2 whatever the
+        composition's order. ``quadrature`` ``(1,)``, when given, gains the work of the
+        loads and supports over the steps (trapezoidal rule over the synchronized states;
+        :meth:`quadrature_rate` is its integrand)."""
         self._refuse_rollers()
+        if self.tau > 0.0:
+            raise ValueError(f"splitting methods are for undamped problems (kelvin_voigt = {self.tau:g} s): use an "
+                             "RKMK method for Kelvin-Voigt damping")
         cp = self.__dict__.get("_split_data") or self.compiled_kernels()  # built once: a call per output time
         self._split_data = cp
         if cp is None:
@@ -626,7 +631,10 @@ class GalerkinBeamProblem(BeamBase):
 
         ys = tuple(np.array(a, dtype=float) for a in cp.pack(y))
         work = tuple(np.empty_like(a) for a in ys)
-        split_steps(cp.data, ys, work, np.asarray(gammas, dtype=float), float(h), int(n), float(t))
+        w = np.zeros(1)
+        split_steps(cp.data, ys, work, np.asarray(gammas, dtype=float), float(h), int(n), float(t), w)
+        if quadrature is not None:
+            quadrature[0] += w[0]
         return cp.unpack(ys)
 
     # ------------------------------------------------------------------ reactions and power

@@ -485,20 +485,40 @@ def _kick(y, acc, h):
             w[j, q] += h * acc[3, j, q]
 
 
+@njit(cache=True, fastmath=FM, inline="always")
+def _synchronized_power(d, y, acc, scratch):
+    """Power of the loads and supports at a state whose velocities are synchronized (after
+    a substep's second kick), with the rates ``acc`` of its configuration (the supports'
+    reactions): the distributed and point loads, the hinges' dampers, the distributed
+    couple and the moving supports. The dissipation of ``tau > 0`` is not in it (the
+    splitting driver refuses damped problems)."""
+    v, w, R = y[1], y[2], y[3]
+    power = _point_loads(d, v, w, R, scratch) + _hinge_springs(d, R, w, scratch)
+    if d.has_m:
+        for i in range(R.shape[0]):
+            if d.wf[i] != 0.0:
+                Om = window(d.band, 0, i, d.j0, w, 0)
+                power += d.wf[i] * dot(rot_T(R, i, row(d.loads, MD)), Om)
+    return power + _support_power(d, v, w, acc)
+
+
 @njit(cache=True)
-def split_steps(data, y, y2, gammas, h, n, t):
+def split_steps(data, y, y2, gammas, h, n, t, work):
     """``n`` steps of length ``h`` from ``(t, y)`` of the symmetric composition ``gammas`` of
     kick-drift-kick (Stormer-Verlet): a kick moves ``v, W`` by the accelerations of the stage
     rates at ``(t, y)``; a drift moves the configuration by the increment ``(h v, h W, 0, 0)``
     (``Theta' = W`` at a zero increment) through the action, exactly on the group. The
     accelerations at the end of a substep serve the next one's first kick. ``y`` (the
-    result) and ``y2`` (work) are states of the compiled engine; returns the rate
-    evaluations."""
+    result) and ``y2`` (work) are states of the compiled engine. When the problem computes
+    the power of its loads, ``work[0]`` gains their work, the trapezoidal rule over the
+    synchronized states of the substeps. Returns the rate evaluations."""
     m = y[1].shape[0]
     u, acc = np.zeros((4, m, 3)), np.empty((4, m, 3))
-    zero = np.zeros((4, m, 3))
+    zero, scratch = np.zeros((4, m, 3)), np.zeros((4, m, 3))
     a, b = y, y2
+    d = data[0]
     engine_rate(data, t, a, zero, acc)
+    p0 = _synchronized_power(d, a, acc, scratch) if d.power else 0.0
     evals, odd = 1, False
     for _ in range(n):
         for g in gammas:
@@ -513,10 +533,16 @@ def split_steps(data, y, y2, gammas, h, n, t):
             engine_rate(data, t, a, zero, acc)
             evals += 1
             _kick(a, acc, 0.5 * hg)
+            if d.power:
+                p1 = _synchronized_power(d, a, acc, scratch)
+                work[0] += 0.5 * hg * (p0 + p1)
+                p0 = p1
         ad.engine_end_step(data, a)
     if odd:  # an odd number of drifts: the result is in the work state
         ad._copy_state5(data, a, y)
     return evals
+
+
 STATE_FIELDS = ("c", "v", "w", "R", "K")
 
 
