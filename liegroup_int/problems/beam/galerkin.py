@@ -64,6 +64,20 @@ class GalerkinBeamState:
         return {"c": self.c, "v": self.v, "w": self.w, "R": self.R, "K": self.K}
 
 
+class _SplitData(NamedTuple):
+    """What :meth:`GalerkinBeamProblem.split_steps` passes its compiled loop: the flat
+    kernel data (a private copy: the loop writes the stage loads into it), the load table
+    of :func:`.kernels.profiles.set_loads`, and work arrays."""
+
+    flat: np.ndarray
+    head: np.ndarray
+    rows: np.ndarray
+    vecs: np.ndarray
+    profiles: np.ndarray
+    work: tuple
+    tmp: np.ndarray
+
+
 class _GJoint(NamedTuple):
     """One joint pair: control rows ``a, b`` of the two patch ends, the point at ``a``,
     ``Q = R0_a^T R0_b``, the point load (or None, acting on row ``a``), the point at ``b``,
@@ -622,20 +636,28 @@ class GalerkinBeamProblem(BeamBase):
         if self.tau > 0.0:
             raise ValueError(f"splitting methods are for undamped problems (kelvin_voigt = {self.tau:g} s): use an "
                              "RKMK method for Kelvin-Voigt damping")
-        cp = self.__dict__.get("_split_data") or self.compiled_kernels()  # built once: a call per output time
-        self._split_data = cp
-        if cp is None:
-            raise ValueError('splitting methods run the compiled kernels: use integrator.backend = "numba" and '
-                             "load profiles the kernels evaluate (no Python callables)")
-        from .kernels.galerkin import split_steps
+        sd = self.__dict__.get("_split_data") or self._split_setup()  # built once: a call per output time
+        self._split_data = sd
+        from .kernels.galerkin import call_split_steps
 
-        ys = tuple(np.array(a, dtype=float) for a in cp.pack(y))
-        work = tuple(np.empty_like(a) for a in ys)
+        ys = tuple(np.array(a, dtype=float, order="C") for a in (y.c, y.v, y.w, y.R, y.K))
         w = np.zeros(1)
-        split_steps(cp.data, ys, work, np.asarray(gammas, dtype=float), float(h), int(n), float(t), w)
+        call_split_steps(sd.flat, sd.head, sd.rows, sd.vecs, sd.profiles, ys, sd.work, np.asarray(gammas, dtype=float),
+                         float(h), int(n), float(t), w, sd.tmp)
         if quadrature is not None:
             quadrature[0] += w[0]
-        return cp.unpack(ys)
+        return self.state_cls(*ys)
+
+    def _split_setup(self) -> "_SplitData":
+        """The compiled leapfrog's data: a private copy of the kernels' flat data, the load
+        table, and work arrays reused by every call."""
+        enc = self._nb._table.encoded() if self._nb is not None else None
+        if enc is None:
+            raise ValueError('splitting methods run the compiled kernels: use integrator.backend = "numba" and '
+                             "load profiles the kernels evaluate (no Python callables)")
+        y = self.initial_state()
+        work = tuple(np.empty(np.shape(a)) for a in (y.c, y.v, y.w, y.R, y.K))
+        return _SplitData(self._nb.flat.copy(), self._nb.head, *enc, work=work, tmp=np.zeros((4, 4, self.n, 3)))
 
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):

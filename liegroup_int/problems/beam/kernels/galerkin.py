@@ -502,8 +502,8 @@ def _synchronized_power(d, y, acc, scratch):
     return power + _support_power(d, v, w, acc)
 
 
-@njit(cache=True)
-def split_steps(data, y, y2, gammas, h, n, t, work):
+@njit(cache=True, inline="always")
+def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
     """``n`` steps of length ``h`` from ``(t, y)`` of the symmetric composition ``gammas`` of
     kick-drift-kick (Stormer-Verlet): a kick moves ``v, W`` by the accelerations of the stage
     rates at ``(t, y)``; a drift moves the configuration by the increment ``(h v, h W, 0, 0)``
@@ -511,10 +511,12 @@ def split_steps(data, y, y2, gammas, h, n, t, work):
     accelerations at the end of a substep serve the next one's first kick. ``y`` (the
     result) and ``y2`` (work) are states of the compiled engine. When the problem computes
     the power of its loads, ``work[0]`` gains their work, the trapezoidal rule over the
-    synchronized states of the substeps. Returns the rate evaluations."""
+    synchronized states of the substeps. ``tmp`` ``(4, 4, n, 3)`` holds the increment,
+    the rates, a zero increment and a scratch load vector. Returns the rate evaluations."""
+    u, acc, zero, scratch = tmp[0], tmp[1], tmp[2], tmp[3]
+    u[:] = 0.0
+    zero[:] = 0.0
     m = y[1].shape[0]
-    u, acc = np.zeros((4, m, 3)), np.empty((4, m, 3))
-    zero, scratch = np.zeros((4, m, 3)), np.zeros((4, m, 3))
     a, b = y, y2
     d = data[0]
     engine_rate(data, t, a, zero, acc)
@@ -541,6 +543,16 @@ def split_steps(data, y, y2, gammas, h, n, t, work):
     if odd:  # an odd number of drifts: the result is in the work state
         ad._copy_state5(data, a, y)
     return evals
+
+
+@njit(cache=True, _nrt=False)
+def call_split_steps(flat, head, rows, vecs, profiles, y, y2, gammas, h, n, t, work, tmp):
+    """:func:`split_steps` from the flat data (:func:`.adapters.pack`; the load rows, vectors
+    and profiles of :func:`set_loads`): two arrays to unbox at a call instead of the named
+    data's fields (a one-step call 12 us instead of 25 on the pendulum p3 n20). Compiled
+    without reference counting, which the loop would otherwise do on the arrays it takes
+    out of tuples: 3.5 us a step instead of 4.2 there."""
+    return split_steps((unpack(flat, head), rows, vecs, profiles), y, y2, gammas, h, n, t, work, tmp)
 
 
 STATE_FIELDS = ("c", "v", "w", "R", "K")
