@@ -2,10 +2,11 @@
 
     python benchmarks/free_body_first_call.py [rkmk4 rkmk45 ...]
 
-Each method runs in a fresh process (numba compiles the user's ``f`` and the engine's
-loops for it; a user's ``f`` is not cached on disk): CPU seconds of the first and the
-second ``integrate`` call on the README's free rigid body
-(:mod:`liegroup_int.bench.free_body`); their difference is the compile time.
+Each method runs in a fresh process: numba compiles the user's ``f`` (a new function is
+never in the disk cache) and loads the engine's loops, which take ``f`` as a first-class
+function value, from the disk cache (compiled on the first run after an install). CPU
+seconds of the first and the second ``integrate`` call on the README's free rigid body
+(:mod:`liegroup_int.bench.free_body`); their difference is the first call's overhead.
 """
 
 from __future__ import annotations

@@ -13,8 +13,7 @@ Two measurements on SO(3) x R^3 (the README's free rigid body), process CPU time
 
 Single points of the built-in groups go through the groups' compiled kernels
 (``GroupProblem(..., compiled=True)``, the default); ``--numpy`` switches them off for
-comparison. ``--quick``: short spans, and no ``numba.njit`` ``f`` (compiling the engine
-for a user's ``f`` takes several seconds in every process).
+comparison. ``--quick``: short spans, and no ``numba.njit`` ``f``.
 """
 
 from __future__ import annotations

@@ -16,7 +16,6 @@ of the table. A problem on a group then supplies only its vector field:
 from __future__ import annotations
 
 import math
-import types
 
 import numpy as np
 from numba import njit
@@ -133,50 +132,91 @@ def unit_scale(data, y, out):
 
 
 # ---------------------------------------------------------------- a user's njit f
-USER_F = None  # bound to the user's function in each compiled copy (see _user_kernels)
+#: Where the data of a user's field hold the point shape it sees (``data[SHAPE]``) and the
+#: function itself (``data[FIELD]``, a first-class function value of :func:`field_type`).
+SHAPE, FIELD = 5, 6
 
 
-def _user_field(data, t, y, out):
+def field_type(point_ndim: int):
+    """The first-class function type of a user's field on points of ``point_ndim``
+    dimensions: ``f(t: float64, y: float64[C-contiguous, point_ndim]) -> float64[::1]``."""
+    from numba.core import types as nt
+
+    return nt.FunctionType(nt.Array(nt.float64, 1, "C")(nt.float64, nt.Array(nt.float64, point_ndim, "C")))
+
+
+_DIM_ERROR = "f(t, y) must return a float array of shape (space.dim,)"
+
+
+def field_function(f, point_ndim: int):
+    """``f`` as the engine calls it: ``f`` itself when it returns a C-contiguous float64
+    vector for a point of ``point_ndim`` dimensions, else a small compiled adapter that
+    copies its 1-D result into one (a result that is not 1-D is refused in one line)."""
+    from numba.core import types as nt
+
+    ftype = field_type(point_ndim)
+    res = f.get_compile_result(ftype.signature).signature.return_type
+    if res == ftype.signature.return_type:
+        return f
+    if not (isinstance(res, nt.Array) and res.ndim == 1 and isinstance(res.dtype, (nt.Float, nt.Integer))):
+        raise ValueError(f"{_DIM_ERROR}, got {res}")
+
+    @njit(cache=False)
+    def adapted(t, y):
+        w = f(t, y)
+        out = np.empty(w.shape[0])
+        for k in range(w.shape[0]):
+            out[k] = w[k]
+        return out
+
+    return adapted
+
+
+@njit(cache=True)
+def user_field(data, t, y, out):
     """``out = f(t, y)`` with the point reshaped to the group's point shape."""
-    w = USER_F(t, y.reshape(data[5]))
-    if w.ndim != 1 or w.shape[0] != out.shape[0]:
-        raise ValueError("f(t, y) must return a float array of shape (space.dim,)")
+    w = data[FIELD](t, y.reshape(data[SHAPE]))
+    if w.shape[0] != out.shape[0]:
+        raise ValueError(_DIM_ERROR)
     for k in range(out.shape[0]):
         out[k] = w[k]
     return 0.0
 
 
+@njit(cache=True)
 def _user_rate(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
-    _user_field(data, t, y, out)  # the compiled copy bound next to this one (_user_kernels)
+    user_field(data, t, y, out)
     dexpinv_flat(data[0], data[1], data[2], u, out, out, 0)
     return 0.0
 
 
-_USER_KERNELS: dict = {}
+def user_problem(kernels: EngineKernels, data: tuple, problem, dim: int, extra: tuple = ()) -> CompiledProblem:
+    """The engine's view of a user's compiled ``f`` on one point of ``problem.space``: the
+    kernels' ``data`` (:data:`SHAPE` entries), the point shape, ``f`` as a first-class
+    function value, then ``extra``."""
+    shape = tuple(int(k) for k in problem.space.point_shape)
+    data = data + (shape, field_function(problem.f, len(shape))) + tuple(extra)
+    return CompiledProblem(kernels, data, lambda n: dim,
+                           single_point_pack(shape), lambda flat: flat.reshape(shape),
+                           functions=((FIELD, field_type(len(shape))),))
 
 
-def _user_kernels(f, action=group_action, scale=group_scale, name: str = "user") -> EngineKernels:
-    """Engine kernels calling the compiled ``f`` with the given action and error scale
-    (built once per function and action; not cached on disk: numba cannot key a cache on a
-    user's function)."""
-    kern = _USER_KERNELS.get((f, name))
-    if kern is None:
-        ns = dict(globals(), USER_F=f)
-        made = {}
-        for fn in (_user_field, _user_rate):  # _user_rate calls the compiled _user_field
-            copy = types.FunctionType(fn.__code__, ns, fn.__name__)
-            made[fn.__name__] = ns[fn.__name__] = njit(cache=False)(copy)
-        kern = EngineKernels(name, made["_user_rate"], action, group_angle, scale,
-                             field=made["_user_field"], dexpinv=group_dexpinv, cache=False)
-        _USER_KERNELS[(f, name)] = kern
-    return kern
+def _user_kernels(name: str, action, scale) -> EngineKernels:
+    """Engine kernels calling a user's ``f`` from the data with ``action`` and ``scale``: one
+    set per kind of space, whatever the function (cached on disk)."""
+    return EngineKernels(name, _user_rate, action, group_angle, scale, field=user_field, dexpinv=group_dexpinv)
+
+
+USER_KERNELS = _user_kernels("user", group_action, group_scale)
+SPHERE_KERNELS = _user_kernels("user_sphere", sphere_action, unit_scale)
+TANGENT_SPHERE_KERNELS = _user_kernels("user_ts2", tangent_sphere_action, unit_scale)
 
 
 def sphere_kernels(problem) -> CompiledProblem:
     """The engine's view of an ODE on ``Sphere()`` (SO(3) acting) with a numba-compiled ``f``,
     on one point, with the group's compiled exp and dexpinv."""
-    return _space_kernels(problem, SO3, sphere_action, "user_sphere")
+    return user_problem(SPHERE_KERNELS, group_data(SO3), problem, int(SO3.dim))
 
 
 def tangent_sphere_kernels(problem) -> CompiledProblem:
@@ -184,15 +224,7 @@ def tangent_sphere_kernels(problem) -> CompiledProblem:
     with a numba-compiled ``f``, on one point."""
     factors = getattr(problem.space, "factors", (problem.space,))
     group = SE3 if len(factors) == 1 else Product(*[SE3] * len(factors))
-    return _space_kernels(problem, group, tangent_sphere_action, "user_ts2")
-
-
-def _space_kernels(problem, group, action, name) -> CompiledProblem:
-    space = problem.space
-    dim = int(group.dim)
-    return CompiledProblem(_user_kernels(problem.f, action, unit_scale, name), group_data(group, space.point_shape),
-                           lambda n: dim, single_point_pack(space.point_shape),
-                           lambda flat: flat.reshape(space.point_shape))
+    return user_problem(TANGENT_SPHERE_KERNELS, group_data(group), problem, int(group.dim))
 
 
 def single_point_pack(shape):
@@ -214,7 +246,4 @@ def single_point_pack(shape):
 def group_problem_kernels(problem) -> CompiledProblem:
     """The engine's view of a :class:`~liegroup_int.integrators.problem.GroupProblem`
     whose ``f`` is numba-compiled: single points of ``problem.space`` only."""
-    shape = tuple(int(k) for k in problem.space.point_shape)
-    dim = int(problem.space.dim)
-    return CompiledProblem(_user_kernels(problem.f), group_data(problem.space, shape), lambda n: dim,
-                           single_point_pack(shape), lambda flat: flat.reshape(shape))
+    return user_problem(USER_KERNELS, group_data(problem.space), problem, int(problem.space.dim))

@@ -18,19 +18,18 @@ the sphere (:mod:`.compiled_group`). The mathematics is that of ``SOn``:
 The kernels write into the data's work arrays (plain loops: the matrices are small), so a
 stage allocates nothing (the once-per-step angle check's eigenvalue call does).
 
-Data ``(ii, jj, coef, n, dim, point_shape, A, T, S, E, W)``: the basis indices
+Data ``(ii, jj, coef, n, dim, point_shape, f, A, T, S, E, W)``: the basis indices
 (``hat(xi)[jj, ii] = xi``, ``hat(xi)[ii, jj] = -xi``), the series coefficients, sizes, the
-point shape (what the user's ``f`` sees) and ``n x n`` work arrays.
+point shape (what the user's ``f`` sees), ``f`` itself (a first-class function value,
+:func:`~.compiled_group.user_problem`) and ``n x n`` work arrays.
 """
 
 from __future__ import annotations
 
-import types
-
 import numpy as np
 from numba import njit
 
-from .compiled_group import _user_field, single_point_pack, unit_scale
+from .compiled_group import unit_scale, user_field, user_problem
 from .engine import CompiledProblem, EngineKernels
 
 #: Terms of the dexpinv series without a truncation order (the base class's 40).
@@ -108,8 +107,8 @@ def son_exp(A, E, W):
 @njit(cache=True)
 def son_dexpinv(data, u, w, out):
     """``out = dexpinv_u(w)`` (``w`` may be ``out``)."""
-    ii, jj, coef, A, T, S = data[0], data[1], data[2], data[6], data[7], data[8]
-    W = data[10]
+    ii, jj, coef, A, T, S = data[0], data[1], data[2], data[7], data[8], data[9]
+    W = data[11]
     n = A.shape[0]
     _hat(u, ii, jj, A)
     _hat(w, ii, jj, T)
@@ -135,7 +134,7 @@ def son_dexpinv(data, u, w, out):
 @njit(cache=True)
 def son_angle(data, u):
     """Spectral norm of ``hat(u)``: the largest rotation angle of ``exp(u)``."""
-    ii, jj, A, T = data[0], data[1], data[6], data[7]
+    ii, jj, A, T = data[0], data[1], data[7], data[8]
     _hat(u, ii, jj, A)
     n = A.shape[0]
     for i in range(n):  # T = A^T A
@@ -151,7 +150,7 @@ def son_angle(data, u):
 @njit(cache=True)
 def stiefel_action(data, u, y, out):
     """``out = exp(u) Y`` (Stiefel: ``Y`` of shape ``(n, k)``)."""
-    ii, jj, n, A, E, W = data[0], data[1], data[3], data[6], data[9], data[10]
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[7], data[10], data[11]
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
     k = y.shape[0] // n
@@ -166,7 +165,7 @@ def stiefel_action(data, u, y, out):
 @njit(cache=True)
 def isospectral_action(data, u, y, out):
     """``out = Q L Q^T`` with ``Q = exp(u)`` (Isospectral: ``L`` of shape ``(n, n)``)."""
-    ii, jj, n, A, E, W = data[0], data[1], data[3], data[6], data[9], data[10]
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[7], data[10], data[11]
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
     for i in range(n):  # W = E L
@@ -183,33 +182,26 @@ def isospectral_action(data, u, y, out):
             out[i * n + j] = acc
 
 
+@njit(cache=True)
 def _user_rate_son(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
-    _user_field(data, t, y, out)  # the compiled copy bound next to this one
+    user_field(data, t, y, out)
     son_dexpinv(data, u, out, out)
     return 0.0
 
 
-_KERNELS: dict = {}
+def _son_kernels(name: str, action) -> EngineKernels:
+    return EngineKernels(name, _user_rate_son, action, son_angle, unit_scale, field=user_field, dexpinv=son_dexpinv)
 
 
-def _kernels(f, action, name: str) -> EngineKernels:
-    kern = _KERNELS.get((f, name))
-    if kern is None:
-        ns = dict(globals(), USER_F=f)
-        made = {}
-        for fn in (_user_field, _user_rate_son):
-            copy = types.FunctionType(fn.__code__, ns, fn.__name__)
-            made[fn.__name__] = ns[fn.__name__] = njit(cache=False)(copy)
-        kern = EngineKernels(name, made["_user_rate_son"], action, son_angle, unit_scale,
-                             field=made["_user_field"], dexpinv=son_dexpinv, cache=False)
-        _KERNELS[(f, name)] = kern
-    return kern
+STIEFEL_KERNELS = _son_kernels("user_stiefel", stiefel_action)
+ISOSPECTRAL_KERNELS = _son_kernels("user_isospectral", isospectral_action)
 
 
-def son_data(group, point_shape, order: int | None = None) -> tuple:
-    """The kernels' data for ``SOn(n)`` acting on points of ``point_shape``, the dexpinv
-    series to ``order`` (``None``: :data:`SERIES_TERMS`)."""
+def son_data(group, order: int | None = None) -> tuple[tuple, tuple]:
+    """The kernels' data for ``SOn(n)``, the dexpinv series to ``order`` (``None``:
+    :data:`SERIES_TERMS`): the leading entries and the ``n x n`` work arrays (which follow
+    the point shape and the user's ``f``, module docstring)."""
     from ..groups._series import bernoulli_numbers, factorials
 
     terms = SERIES_TERMS if order is None else int(order)
@@ -218,7 +210,7 @@ def son_data(group, point_shape, order: int | None = None) -> tuple:
     n = int(group.n)
     work = tuple(np.zeros((n, n)) for _ in range(5))
     return (np.ascontiguousarray(group._i, dtype=np.int64), np.ascontiguousarray(group._j, dtype=np.int64), coef,
-            n, int(group.dim), tuple(int(k) for k in point_shape)) + work
+            n, int(group.dim)), work
 
 
 def son_space_kernels(problem, order: int | None = None) -> CompiledProblem | None:
@@ -229,14 +221,12 @@ def son_space_kernels(problem, order: int | None = None) -> CompiledProblem | No
 
     space = problem.space
     if type(space) is Stiefel:
-        action, name = stiefel_action, "user_stiefel"
+        kernels = STIEFEL_KERNELS
     elif type(space) is Isospectral:
-        action, name = isospectral_action, "user_isospectral"
+        kernels = ISOSPECTRAL_KERNELS
     else:
         return None
     if space.group.n == 2:
         return None  # SO(2): the generic path (its exp is closed-form there)
-    shape = tuple(int(k) for k in space.point_shape)
-    dim = int(space.group.dim)
-    return CompiledProblem(_kernels(problem.f, action, name), son_data(space.group, shape, order), lambda p: dim,
-                           single_point_pack(shape), lambda flat: flat.reshape(shape))
+    head, work = son_data(space.group, order)
+    return user_problem(kernels, head, problem, int(space.group.dim), work)

@@ -256,6 +256,11 @@ class CompiledProblem:
     unpack : callable
         ``unpack(packed) -> y``: the state from the engine's form (arrays the engine
         returns are new; they may be kept).
+    functions : tuple of (int, numba.types.FunctionType)
+        Entries of ``data`` that are compiled functions passed as first-class function
+        values of the given type (a user's vector field): the loops are compiled once per
+        function type, cached on disk, and call the function through its address, so a
+        new function costs only its own compilation.
     """
 
     kernels: EngineKernels
@@ -263,6 +268,7 @@ class CompiledProblem:
     increment_size: Callable[[object], int]
     pack: Callable
     unpack: Callable
+    functions: tuple = ()
 
 
 # ====================================================================== the loops
@@ -495,6 +501,24 @@ def engine_for(kernels: EngineKernels) -> Engine:
     return eng
 
 
+def typed_entry(loop, args: tuple, functions: dict) -> Callable:
+    """The entry point of the numba dispatcher ``loop`` compiled for ``args`` with the
+    entries ``functions`` of ``args[0]`` (index -> ``FunctionType``) typed as first-class
+    functions (compiled, or loaded from the disk cache, once per signature)."""
+    import warnings
+
+    from numba import typeof
+    from numba.core import types as nt
+    from numba.core.errors import NumbaExperimentalFeatureWarning
+
+    data = nt.Tuple([functions.get(i) or typeof(x) for i, x in enumerate(args[0])])
+    sig = (data,) + tuple(typeof(a) for a in args[1:])
+    with warnings.catch_warnings():  # first-class function types are "experimental" in numba
+        warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+        loop.compile(sig)
+    return loop.overloads[sig].entry_point
+
+
 # ====================================================================== Python side
 class CompiledStepper:
     """Fixed-step and adaptive loops of one problem and tableau through the engine:
@@ -519,14 +543,28 @@ class CompiledStepper:
         self.b = np.ascontiguousarray(tab.b_f, dtype=float)
         self.c = np.ascontiguousarray(tab.c_f, dtype=float)
         self.e = None if tab.e_f is None else np.ascontiguousarray(tab.e_f, dtype=float)
+        self._entries: dict[str, Callable] = {}
+
+    def _loop(self, name: str, args: tuple) -> Callable:
+        """The engine loop ``name`` for ``args``: the dispatcher itself, or, when the data
+        carry first-class functions, the entry point compiled for their function types
+        (a plain call would specialize the loop on each function)."""
+        loop = getattr(self.engine, name)
+        if not self.cp.functions:
+            return loop
+        entry = self._entries.get(name)
+        if entry is None:
+            entry = self._entries[name] = typed_entry(loop, args, dict(self.cp.functions))
+        return entry
 
     def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float) -> Advance:
         """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
         ends at ``t_start + (i + 1) dt``, the last one at ``t_stop``); ``y`` is not
         modified. See :class:`Advance`."""
         cp, flat = self.cp, self.cp.pack(y)
-        out = self.engine.advance_fixed(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal,
-                                        flat, float(t_start), float(t_stop), float(dt), int(n_steps), float(max_angle))
+        args = (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal, flat, float(t_start),
+                float(t_stop), float(dt), int(n_steps), float(max_angle))
+        out = self._loop("advance_fixed", args)(*args)
         yf, steps, status, t, t_fail, h_min, h_max, ang, quad, evals = out
         return Advance(cp.unpack(yf), float(t), int(steps), float(h_min), float(h_max), _FIXED_STATUS[status],
                        float(t_fail), float(ang), float(quad), int(evals))
@@ -539,10 +577,10 @@ class CompiledStepper:
         if self.e is None:
             raise ValueError(f"method {self.tab.name!r} has no embedded pair")
         cp, flat = self.cp, self.cp.pack(y)
-        out = self.engine.advance_adaptive(cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.e,
-                                           self.fsal, flat, float(t), float(stop), float(h), float(err_prev),
-                                           float(rate), float(rtol), float(atol), float(h_max), int(max_steps_left),
-                                           float(max_angle), np.asarray(gains, dtype=float))
+        args = (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.e, self.fsal, flat, float(t),
+                float(stop), float(h), float(err_prev), float(rate), float(rtol), float(atol), float(h_max),
+                int(max_steps_left), float(max_angle), np.asarray(gains, dtype=float))
+        out = self._loop("advance_adaptive", args)(*args)
         yf, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out
         return AdaptiveAdvance(cp.unpack(yf), float(t), float(h), float(err_prev), int(steps), int(rejected),
                                int(attempts), float(h_min), float(h_max_acc), _ADAPTIVE_STATUS[status], float(quad),
