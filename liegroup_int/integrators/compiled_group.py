@@ -155,7 +155,9 @@ def field_function(f, point_ndim: int):
     from numba.core import types as nt
 
     ftype = field_type(point_ndim)
-    res = f.get_compile_result(ftype.signature).signature.return_type
+    args = tuple(ftype.signature.args)
+    f.compile(args)
+    res = f.overloads[args].signature.return_type
     if res == ftype.signature.return_type:
         return f
     if not (isinstance(res, nt.Array) and res.ndim == 1 and isinstance(res.dtype, (nt.Float, nt.Integer))):

@@ -147,3 +147,31 @@ def test_batches_need_a_python_f():
     y0 = SO3.exp(np.zeros((2, 3)))
     with pytest.raises(ValueError, match="one point of shape"):
         integrate(f, y0, (0.0, 0.01), space=space, method="rkmk4", dt=1e-3)
+
+
+@njit
+def _matrix_result(t, y):
+    return np.zeros((3, 1))
+
+
+@njit
+def _strided_spin(t, R):  # _spin's values as a strided view of a longer array
+    out = np.zeros(6)
+    w = _spin(t, R)
+    for k in range(3):
+        out[2 * k] = w[k]
+    return out[::2]
+
+
+def test_a_result_that_is_not_a_vector_is_refused_in_one_line():
+    with pytest.raises(ValueError, match=r"shape \(space.dim,\), got array\(float64, 2d") as err:
+        integrate(_matrix_result, np.eye(3), (0.0, 0.01), space=SO3, method="rkmk4", dt=1e-3)
+    assert "\n" not in str(err.value)
+
+
+def test_a_strided_result_runs_in_the_engine_like_a_contiguous_one():
+    """A 1-D result that is not C-contiguous goes through the adapter: the same steps as
+    the contiguous field, bit for bit (the adapter only copies)."""
+    a = integrate(_strided_spin, np.eye(3), (0.0, 0.5), space=SO3, method="rkmk4", dt=1e-2).y_final
+    b = integrate(_spin, np.eye(3), (0.0, 0.5), space=SO3, method="rkmk4", dt=1e-2).y_final
+    np.testing.assert_array_equal(a, b)
