@@ -266,6 +266,22 @@ def se3_exp_parts(u, a, ser, thr):
     return e, r0 + cB * c0 + cC * d0, r1 + cB * c1 + cC * d1, r2 + cB * c2 + cC * d2
 
 
+@njit(cache=True, inline="always")
+def retract_so3(ser, thr, u, a, y, p, out):
+    """``out[p:p+9] = exp(u[a:a+3]) y[p:p+9]`` for a rotation stored row by row."""
+    x0, x1, x2 = u[a], u[a + 1], u[a + 2]
+    cA, cB = _coef_AB(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
+    _rotate(_exp_rot(cA, cB, x0, x1, x2), y, p, out, p, 3)
+
+
+@njit(cache=True, inline="always")
+def dexpinv_so3(ser, thr, u, w, out, a):
+    """``out[a:a+3] = dexpinv_t(w[a:a+3])`` with ``t = u[a:a+3]`` (``w`` may be ``out``)."""
+    t0, t1, t2 = u[a], u[a + 1], u[a + 2]
+    cD = coef_D(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
+    out[a], out[a + 1], out[a + 2] = _dexpinv3(cD, t0, t1, t2, w[a], w[a + 1], w[a + 2])
+
+
 @njit(cache=True)
 def retract_flat(ft, ser, thr, u, y, out, po, ao):
     """``out = exp(u) y`` factor by factor for the point at offset ``po`` of ``y``/``out``
@@ -276,9 +292,7 @@ def retract_flat(ft, ser, thr, u, y, out, po, ao):
             for k in range(n):
                 out[p + k] = y[p + k] + u[a + k]
         elif kind == KIND_SO3:
-            x0, x1, x2 = u[a], u[a + 1], u[a + 2]
-            cA, cB = _coef_AB(math.sqrt(x0 * x0 + x1 * x1 + x2 * x2), ser, thr)
-            _rotate(_exp_rot(cA, cB, x0, x1, x2), y, p, out, p, 3)
+            retract_so3(ser, thr, u, a, y, p, out)
         else:  # SE3: exp(u) = [[E, J rho], [0, 1]], u = (rho, theta)
             e, j0, j1, j2 = se3_exp_parts(u, a, ser, thr)
             _rotate(e, y, p, out, p, 4)
@@ -301,9 +315,7 @@ def dexpinv_flat(ft, ser, thr, u, w, out, ao):
             for k in range(n):
                 out[a + k] = w[a + k]
         elif kind == KIND_SO3:
-            t0, t1, t2 = u[a], u[a + 1], u[a + 2]
-            cD = coef_D(math.sqrt(t0 * t0 + t1 * t1 + t2 * t2), ser, thr)
-            out[a], out[a + 1], out[a + 2] = _dexpinv3(cD, t0, t1, t2, w[a], w[a + 1], w[a + 2])
+            dexpinv_so3(ser, thr, u, w, out, a)
         else:
             r0, r1, r2 = u[a], u[a + 1], u[a + 2]
             t0, t1, t2 = u[a + 3], u[a + 4], u[a + 5]

@@ -6,9 +6,11 @@ for a single body is almost all of its cost. Here the body supplies only its vec
 (:func:`field_kernel`, the arithmetic of
 :meth:`~liegroup_int.problems.rigid_body.RigidBody.vector_field`: ``omega = R W``,
 ``dW = ((I W) x W [+ Gamma x m g chi]) / I`` with ``Gamma = R[2, :]``); the action,
-dexpinv, rotation angle and error scale are the compiled kernels of the group
-(:mod:`liegroup_int.integrators.compiled_group`) on ``(SO3 x R3)^N`` for a batch of ``N``
-bodies, and the loops are the engine's (:mod:`liegroup_int.integrators.engine`).
+dexpinv, rotation angle and error scale are the compiled kernels of the group on ``(SO3 x
+R3)^N`` for a batch of ``N`` bodies (the per-factor SO(3) kernels of
+:mod:`liegroup_int.groups.kernels_numba` for the action and dexpinv, inlined into the
+stage; :mod:`liegroup_int.integrators.compiled_group` for the angle and scale), and the
+loops are the engine's (:mod:`liegroup_int.integrators.engine`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..integrators.compiled_group import group_action, group_angle, group_data, group_dexpinv, group_scale
+from ..groups.kernels_numba import dexpinv_so3, retract_so3
+from ..integrators.compiled_group import group_angle, group_data, group_scale
 from ..integrators.engine import CompiledProblem, EngineKernels
 
 # layout of the parameter array ``prm``: I(3), m g chi (3), heavy (mass > 0)
@@ -54,16 +57,40 @@ def field_kernel(data, t, y, out):
 
 
 @njit(cache=True, fastmath=False, inline="always")
+def action_kernel(data, u, y, out):
+    """``out = exp(u) y`` on ``(SO3 x R3)^N``: the group's kernels for this layout, inlined
+    (the generic factor-table loop, :func:`~..integrators.compiled_group.group_action`, is
+    called out of line)."""
+    ser, thr = data[1], data[2]
+    for j in range(y.shape[0] // 12):
+        p, a = 12 * j, 6 * j
+        retract_so3(ser, thr, u, a, y, p, out)
+        for k in range(3):
+            out[p + 9 + k] = y[p + 9 + k] + u[a + 3 + k]
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def dexpinv_kernel(data, u, w, out):
+    """``out = dexpinv_u(w)`` on ``(SO3 x R3)^N`` (``w`` may be ``out``)."""
+    ser, thr = data[1], data[2]
+    for j in range(u.shape[0] // 6):
+        a = 6 * j
+        dexpinv_so3(ser, thr, u, w, out, a)
+        for k in range(3, 6):
+            out[a + k] = w[a + k]
+
+
+@njit(cache=True, fastmath=False, inline="always")
 def rate_kernel(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
     field_kernel(data, t, y, out)
-    group_dexpinv(data, u, out, out)
+    dexpinv_kernel(data, u, out, out)
     return 0.0
 
 
 #: The rigid body's kernels for the compiled engine.
-ENGINE_KERNELS = EngineKernels("rigid_body", rate_kernel, group_action, group_angle, group_scale,
-                               field=field_kernel, dexpinv=group_dexpinv)
+ENGINE_KERNELS = EngineKernels("rigid_body", rate_kernel, action_kernel, group_angle, group_scale,
+                               field=field_kernel, dexpinv=dexpinv_kernel)
 
 
 def parameters(body) -> np.ndarray:
