@@ -33,8 +33,8 @@ Measured targets (ratios ours / scipy DOP853 in CPU time):
 
 1. free body, njit ``f``: CPU to reach errors 1e-6 and 1e-9 (log-log interpolation along
    each method's Pareto front; the cheapest single run reaching the level is reported too),
-   against DOP853 with the plain-float RHS; numba compile time apart (first call, measured
-   in a fresh process);
+   against DOP853 with the plain-float RHS; the first call's overhead apart (measured in a
+   fresh process);
 2. free body, plain Python ``f`` against DOP853 with its NumPy-style RHS at ``rtol = 1e-9``
    and at equal error; the generic loop's overhead per stage without ``f`` (an ``f``
    returning a precomputed array);
@@ -717,7 +717,7 @@ def headline(t1, t2, t3, t4, comp):
                          "6 + small", (f"{x['per_step']:.3f} evals / accepted step ({r['nfev']} vs "
                                        f"{x['without']} without reuse)"), "shown"])
     if comp:
-        rows.append(["numba compile (first call, fresh process; not in the ratios)", "-",
+        rows.append(["first call of a new njit f, fresh process (engine loops from the disk cache; not in the ratios)", "-",
                      "; ".join(f"{m} {v['first'] - v['second']:.1f} s" for m, v in comp.items()), "-"])
     return rows
 
@@ -907,8 +907,8 @@ def heavy_top_sweep(cfg, skipped):
 
 def quick(args):
     """The heavy top alone (built-in compiled plugin, kernels cached on disk): the free
-    body's ``numba.njit`` f compiles the engine anew in every process (~10 s per loop)."""
-    print("quick mode: heavy top only (the free body's njit f would compile the engine for ~20 s)")
+    body's sweep and its fresh-process first-call probes are left out."""
+    print("quick mode: heavy top only (the free body's sweep and first-call probes are left out)")
     rows, _ = heavy_top_sweep(QUICK, [])
     h3, r3, _ = target3(rows)
     sh, srows = summary(rows)
@@ -1039,8 +1039,9 @@ separatrix, grows with the number of steps, so the coarser run is the reference)
 
 **Target 1, numba.njit f, against DOP853 with the plain-float RHS.** CPU to reach each error, interpolated in
 log-log along each method's Pareto front ("ours best": the cheapest of rkmk4/rkmk6/rkmk45/rkmk65 there); the
-cheapest single run reaching the level is shown as a check that does not interpolate. numba compile time
-(first `integrate` call in a fresh process minus a second call; not in the ratios):
+cheapest single run reaching the level is shown as a check that does not interpolate. First-call overhead of
+a new njit f (first `integrate` call in a fresh process minus a second call, the engine's loops loaded from
+numba's disk cache; not in the ratios):
 {", ".join(f"{m} {v['first'] - v['second']:.1f} s" for m, v in comp.items())}.
 
 {md_table(h1, r1)}
