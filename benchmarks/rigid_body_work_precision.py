@@ -785,13 +785,12 @@ def _reading_heavy_top_fsal(t3, t4, pe) -> list[str]:
     if many and one:
         a, b = one[0]["row"], many[0]["row"]
         parts.append(
-            f"**FSAL.** rkmk45 costs 6 evaluations per attempt plus one per output interval: "
-            f"{a['nfev']} = 6 x {attempts(a)} + {a['nfev'] - 6 * attempts(a)} with one output, "
-            f"{b['nfev']} = 6 x {attempts(b)} + {b['nfev'] - 6 * attempts(b)} with {b['outputs']}; without reuse it "
-            f"would be 7 per attempt ({one[0]['without']} and {many[0]['without']}). Many output times cost more "
-            f"through the steps than through that extra evaluation: landing on each output time shortens a step "
-            f"and the controller continues from that short step, so {b['outputs']} outputs took {b['steps']} accepted steps "
-            f"against {a['steps']} (the engine has no dense output). "
+            f"**FSAL.** rkmk45 costs 6 evaluations per attempt plus one at the start: "
+            f"{a['nfev']} = 6 x {attempts(a)} + {a['nfev'] - 6 * attempts(a)} with one output; without reuse it "
+            f"would be 7 per attempt ({one[0]['without']}). With {b['outputs']} output times the states come from "
+            f"the dense output: the same {b['steps']} accepted steps (against {a['steps']}), and "
+            f"{b['nfev']} = 6 x {attempts(b)} + {b['nfev'] - 6 * attempts(b)} evaluations, the extra ones the "
+            f"interpolant's two bootstrapped stages on each step with an output time inside. "
         )
     return parts
 
@@ -1100,9 +1099,9 @@ Energy and vertical-momentum (`Lz = (R I W) . e3`) drift relative to their initi
 ### FSAL reuse (target 4)
 
 The pairs rkmk45 (7 stages) and rkmk65 (9) are first-same-as-last: the last stage's field starts the next
-step, so an attempt costs one evaluation less; the compiled engine evaluates f once more at the start of each
-output interval (the generic loop once per run). "Without reuse" is stages x attempts; the generic loop was also
-run with the reuse switched off (a `GroupProblem` subclass with `fsal_reuse = False`) to measure it.
+step, so an attempt costs one evaluation less, across output times too (the compiled engine carries it from one
+call to the next). "Without reuse" is stages x attempts; the generic loop was also run with the reuse switched
+off (a `GroupProblem` subclass with `fsal_reuse = False`) to measure it.
 
 {md_table(h4, r4)}
 

@@ -66,9 +66,9 @@ def integrate(
         Sorted output times in ``[t0, t_end]``; ``Solution.t`` holds ``t0``, these and the
         final time (by default only ``t0`` and the final time). Their states come from the
         dense output (below), so they do not shorten the steps: the step sequence is that of
-        the run without ``t_eval``. The compiled engine (a ``numba.njit`` field, or a
-        problem with compiled kernels, and no ``monitor``, ``dense_output`` or ``events``)
-        and the commutator-free methods land on them instead.
+        the run without ``t_eval``, in the compiled engine (a ``numba.njit`` field, or a
+        problem with compiled kernels, and no ``monitor``) as in the Python loop. The
+        commutator-free methods land on them instead.
     observer : callable, optional
         ``observer(t, y)`` at output times. Default: a :class:`StateRecorder`, whose
         states are returned in ``Solution.y``.
@@ -82,8 +82,9 @@ def integrate(
         first, or at the ``terminal``-th, occurrence) and ``direction`` (``+1``: rising
         zeros only, ``-1``: falling, ``0``: both). Zeros are located on the dense output by
         Brent's method to ``4 eps`` (:mod:`liegroup_int.integrators.events`) and returned in
-        ``Solution.t_events`` / ``Solution.y_events``. Dense output and events run the
-        generic (Python) step loop, never the compiled engine.
+        ``Solution.t_events`` / ``Solution.y_events``. With the compiled engine, the steps
+        run compiled and each is handed to Python for its interpolant and the events (a
+        Python ``g`` is called per step).
     dense_order : int, optional
         Order ``q`` of the continuous extension (local error ``O(h^(q+1))``), in
         ``[1, p]``. Default: ``p`` for the embedded pairs (rkmk32, rkmk45, rkmk65: values
@@ -131,7 +132,7 @@ def integrate(
     recorder = observer if observer is not None else StateRecorder()
     specs = event_specs(events)
     run = None
-    if dense_output or specs or (t_eval is not None and not _lands_on_outputs(problem, tab, monitor)):
+    if dense_output or specs or (t_eval is not None and not is_commutator_free(tab)):
         if is_commutator_free(tab):
             raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
         run = DenseRun(problem, continuous_extension(tab, dense_order), (t0, t_end), y0, t_eval, recorder,
@@ -178,15 +179,6 @@ def _problem(f, y0, space, method, coordinates):
     if isinstance(space, Product) and isinstance(y0, (tuple, list)):
         y0 = space.join(*y0)
     return GroupProblem(space, f), np.asarray(y0, dtype=float)
-
-
-def _lands_on_outputs(problem: Problem, tab, monitor) -> bool:
-    """Whether the run lands on the output times instead of interpolating: the compiled
-    engine (a problem with compiled kernels and no monitor) and commutator-free methods do."""
-    if is_commutator_free(tab):
-        return True
-    hook = getattr(problem, "compiled_kernels", None)
-    return monitor is None and hook is not None and hook() is not None
 
 
 def _solution(recorder, run, t, y, stats, name) -> Solution:

@@ -81,10 +81,11 @@ def stepper_for(problem, tab: ButcherTableau, monitor=None):
 
 
 def _advance_compiled(stepper, t: float, y, stop: float, dt: float, n: int, max_increment_angle: float,
-                      stats: Stats):
-    """``n`` steps from ``(t, y)`` to ``stop`` in one call of the compiled engine; counts
-    and errors as in the step loop of :func:`integrate_fixed`. Returns ``(t, y)``."""
-    res = stepper.advance(t, y, stop, dt, n, max_increment_angle)
+                      stats: Stats, memory=None, i_first: int = 0, t_return: float = np.inf):
+    """Steps ``i_first .. n - 1`` of the grid from ``t`` to ``stop`` in one call of the
+    compiled engine (up to the first that ends at or after ``t_return``); counts and errors
+    as in the step loop of :func:`integrate_fixed`. Returns the engine's :class:`Advance`."""
+    res = stepper.advance(t, y, stop, dt, n, max_increment_angle, i_first, t_return, memory)
     stats.accept_many(res.steps, res.h_min, res.h_max)
     stats.quadrature += res.quadrature
     stats.rhs_evals += res.rhs_evals
@@ -92,7 +93,22 @@ def _advance_compiled(stepper, t: float, y, stop: float, dt: float, n: int, max_
         raise _blow_up(res.t_fail, stats.steps + 1)
     if res.status == "angle":
         raise _too_large(res.angle, max_increment_angle, res.t_fail, stats.steps + 1)
-    return res.t, res.y
+    return res
+
+
+def _next_stop(on_step, t: float) -> float:
+    """Where the compiled engine must hand a step to ``on_step`` next: the first step that
+    ends at or after this time (``on_step.next_stop(t)``; without it, every step)."""
+    nxt = getattr(on_step, "next_stop", None)
+    return t if nxt is None else float(nxt(t))
+
+
+def _hand_over(problem: Problem, on_step, res):
+    """``on_step`` of the last step of a compiled call; its ``(t, y)`` to stop at, or ``None``."""
+    last = res.last
+    y_prev = last.y
+    K = last.K.reshape((last.K.shape[0],) + np.shape(problem.zero_increment(y_prev)))
+    return on_step(last.t, y_prev, res.t, res.y, K)
 
 
 def integrate_fixed(
@@ -136,7 +152,8 @@ def integrate_fixed(
         ``on_step(t_old, y_old, t_new, y_new, K) -> None or (t, y)`` after every accepted
         RKMK step, with ``K`` the step's stage rates (dense output and events,
         :class:`~.events.DenseRun`); returning ``(t, y)`` ends the run there (a terminal
-        event). It runs the generic loop (not the compiled engine).
+        event). The compiled engine hands it the steps it asks for (``on_step.next_stop(t)``:
+        the first step that ends at or after that time; without the method, every step).
 
     Returns
     -------
@@ -150,8 +167,9 @@ def integrate_fixed(
     cf = is_commutator_free(tab)  # several exponentials per stage, no dexpinv
     if cf and on_step is not None:
         raise ValueError(f"method {tab.name!r}: dense output and events need an RKMK method")
-    stepper = stepper_for(problem, tab, monitor) if not (cf or on_step is not None) else None
+    stepper = stepper_for(problem, tab, monitor) if not cf else None
     steps = _GenericSteps(problem, tab, y0, stats, monitor, on_step) if stepper is None else None
+    memory = stepper.memory(y0) if stepper is not None else None
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -159,8 +177,14 @@ def integrate_fixed(
     for stop in stops:
         # steps of dt from the last stop; the last one lands exactly on ``stop``
         n = max(1, int(np.ceil((stop - t) / dt - 1e-9)))
-        if stepper is not None:
-            t, y = _advance_compiled(stepper, t, y, stop, dt, n, max_increment_angle, stats)
+        if stepper is not None and on_step is not None:
+            t, y, stopped = _compiled_steps(stepper, problem, t, y, stop, dt, n, max_increment_angle, stats, memory,
+                                            on_step)
+            if stopped:
+                break
+        elif stepper is not None:
+            res = _advance_compiled(stepper, t, y, stop, dt, n, max_increment_angle, stats, memory)
+            t, y = res.t, res.y
         else:
             t, y, stopped = _fixed_steps(steps, t, y, stop, dt, n, max_increment_angle)
             if stopped:
@@ -169,6 +193,22 @@ def integrate_fixed(
             observer(t, y)
     stats.wall_time_s += time.perf_counter() - start
     return t, y, stats
+
+
+def _compiled_steps(stepper, problem: Problem, t: float, y, stop: float, dt: float, n: int, max_angle: float,
+                    stats: Stats, memory, on_step):
+    """:func:`_fixed_steps` through the compiled engine: the grid's steps in calls that end
+    where ``on_step`` needs the next step (:func:`_next_stop`). ``(t, y, stopped)``."""
+    t_start, i = t, 0
+    while i < n:
+        res = _advance_compiled(stepper, t_start, y, stop, dt, n, max_angle, stats, memory, i,
+                                _next_stop(on_step, t))
+        i += res.steps
+        hit = _hand_over(problem, on_step, res)
+        if hit is not None:
+            return hit[0], hit[1], True
+        t, y = res.t, res.y
+    return t, y, False
 
 
 class _GenericSteps:
@@ -279,7 +319,8 @@ def integrate_adaptive(
     (:meth:`Problem.compiled_kernels`), with the same arithmetic, controller and limits.
 
     ``on_step(t_old, y_old, t_new, y_new, K)`` is called after every accepted step as in
-    :func:`integrate_fixed` (generic loop; returning ``(t, y)`` ends the run there).
+    :func:`integrate_fixed` (returning ``(t, y)`` ends the run there; the compiled engine
+    hands it the steps it asks for, and lands on the final time only).
 
     Returns
     -------
@@ -292,17 +333,22 @@ def integrate_adaptive(
     t0, t_end = float(t_span[0]), float(t_span[1])
     stops = _output_times(t0, t_end, t_out)
     stats = stats if stats is not None else Stats()
-    stepper = stepper_for(problem, tab, monitor) if on_step is None else None
+    stepper = stepper_for(problem, tab, monitor)
     steps = _GenericSteps(problem, tab, y0, stats, monitor, on_step) if stepper is None else None
     run = _AdaptiveRun(rtol, atol, h_max, max_steps, max_increment_angle, controller.gains(tab),
-                       _initial_control(problem, tab, (t0, t_end), y0, rtol, atol, h0, h_max, controller, stats))
+                       _initial_control(problem, tab, (t0, t_end), y0, rtol, atol, h0, h_max, controller, stats),
+                       stepper.memory(y0) if stepper is not None else None)
     stats.controller = run.ctl.memory()
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
     start = time.perf_counter()
     for stop in stops:
-        if stepper is not None:  # every attempt up to ``stop`` in one compiled call
+        if stepper is not None and on_step is not None:  # calls that end where on_step needs a step
+            t, y, stopped = run.compiled_dense(stepper, problem, t, y, stop, stats, on_step)
+            if stopped:
+                break
+        elif stepper is not None:  # every attempt up to ``stop`` in one compiled call
             t, y = run.compiled(stepper, t, y, stop, stats)
         else:
             t, y, stopped = run.generic(steps, t, y, stop)
@@ -349,12 +395,28 @@ class _AdaptiveRun:
     max_angle: float
     gains: tuple
     ctl: _Control
+    memory: object = None  # the compiled engine's FSAL memory
 
-    def compiled(self, stepper, t: float, y, stop: float, stats: Stats):
-        """Every attempt from ``(t, y)`` to ``stop`` in one call of the compiled engine."""
+    def compiled_dense(self, stepper, problem: Problem, t: float, y, t_land: float, stats: Stats, on_step):
+        """Attempts from ``(t, y)`` to ``t_land`` in compiled calls that end where ``on_step``
+        needs the next step (:func:`_next_stop`), landing on ``t_land`` only. ``(t, y,
+        stopped)``."""
+        while True:
+            res = self.compiled(stepper, t, y, min(_next_stop(on_step, t), t_land), stats, t_land)
+            hit = _hand_over(problem, on_step, res)
+            if hit is not None:
+                return hit[0], hit[1], True
+            t, y = res.t, res.y
+            if t == t_land:
+                return t, y, False
+
+    def compiled(self, stepper, t: float, y, stop: float, stats: Stats, t_land: float | None = None):
+        """Every attempt from ``(t, y)`` up to the first accepted step that ends at or after
+        ``stop`` (landing on ``t_land``, default ``stop``) in one call of the compiled engine;
+        returns ``(t, y)``, the engine's :class:`AdaptiveAdvance` with ``t_land``."""
         c = self.ctl
         res = stepper.advance_to(t, y, stop, c.h, c.err_prev, c.rate, self.rtol, self.atol, self.h_max,
-                                 self.max_steps - stats.steps, self.max_angle, self.gains)
+                                 self.max_steps - stats.steps, self.max_angle, self.gains, t_land, self.memory)
         stats.accept_many(res.steps, res.h_min, res.h_max)
         stats.quadrature += res.quadrature
         stats.rejected += res.rejected
@@ -364,7 +426,7 @@ class _AdaptiveRun:
             raise StepSizeError(f"reached max_steps={self.max_steps} at t={res.t:.6g}", res.t, stats.steps)
         if res.status == "underflow":
             raise StepSizeError(f"step size underflow (h={c.h:.3g}) at t={res.t:.6g}", res.t, stats.steps)
-        return res.t, res.y
+        return res if t_land is not None else (res.t, res.y)
 
     def generic(self, steps: _GenericSteps, t: float, y, stop: float):
         """Attempts from ``(t, y)`` until a step lands on ``stop``: ``(t, y, stopped)``,

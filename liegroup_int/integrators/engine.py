@@ -132,6 +132,9 @@ class Advance:
         ``sum h b . q`` of the accepted steps (``Problem.quadrature_rate``), 0 if none.
     rhs_evals : int
         Vector-field evaluations made (the failed step's included).
+    last : object
+        The last accepted step: ``last.t``, ``last.y`` (its start time and state) and
+        ``last.K`` (its stage rates, flat rows), for dense output.
     """
 
     y: object
@@ -144,6 +147,7 @@ class Advance:
     angle: float
     quadrature: float = 0.0
     rhs_evals: int = 0
+    last: object = None
 
 
 
@@ -157,7 +161,8 @@ class AdaptiveAdvance:
     y : state
         State after the accepted steps.
     t : float
-        Its time (the requested stop if ``status == "ok"``).
+        Its time (``status == "ok"``: the landing time, or the end of the first step past
+        the stop).
     h : float
         Next step to try (after the last accepted or rejected step); for
         ``"underflow"`` the step that fell below the bound.
@@ -169,7 +174,7 @@ class AdaptiveAdvance:
     h_min, h_max : float
         Smallest and largest accepted step (``inf``, ``0`` if none).
     status : {"ok", "max-steps", "underflow"}
-        ``"ok"``: landed on the stop. ``"max-steps"``: the step budget ran out before
+        ``"ok"``: reached the stop. ``"max-steps"``: the step budget ran out before
         the next attempt. ``"underflow"``: a rejection shrank the step below
         ``1e-14 max(1, |t|)``.
     quadrature : float
@@ -179,6 +184,8 @@ class AdaptiveAdvance:
     rate : float
         Controller memory: the rotation rate once the guard has rejected a step, else 0
         (:func:`~liegroup_int.integrators.controller.rotation_rate`).
+    last : object
+        The last accepted step, as in :class:`Advance`.
     """
 
     y: object
@@ -194,6 +201,7 @@ class AdaptiveAdvance:
     quadrature: float = 0.0
     rhs_evals: int = 0
     rate: float = 0.0
+    last: object = None
 
 
 @dataclass(frozen=True)
@@ -319,13 +327,17 @@ def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, h
 
 
 def _workspace(data, s, m, y):
-    """Work arrays of one call: stage rates ``K (s, m)``, increment, zeros, two vector
-    fields ``F (2, m)`` (FSAL), stage quadrature rates, and three states (a copy of ``y``,
-    the stage state, the next state)."""
+    """Work arrays of one call: stage rates ``K (s, m)``, increment, zeros, stage quadrature
+    rates, and three states (a copy of ``y``, the stage state, the next state)."""
     y0 = NEW_STATE(data, y)
     COPY_STATE(data, y, y0)
-    return (np.empty((s, m)), np.empty(m), np.zeros(m), np.empty((2, m)), np.zeros(s), y0, NEW_STATE(data, y),
-            NEW_STATE(data, y))
+    return np.empty((s, m)), np.empty(m), np.zeros(m), np.zeros(s), y0, NEW_STATE(data, y), NEW_STATE(data, y)
+
+
+def _carry(c, i0, have_f0, q0):
+    """Keep the FSAL memory in ``c``: which row of ``F`` holds ``f(t, y)``, whether it is
+    known, and its quadrature rate (the next call continues from it)."""
+    c[0], c[1], c[2] = float(i0), 1.0 if have_f0 else 0.0, q0
 
 
 def _finite(x):
@@ -335,36 +347,46 @@ def _finite(x):
     return True
 
 
-def _advance_fixed(data, m, A, b, cc, fsal, y, t_start, t_stop, dt, n_steps, max_angle):
-    """Up to ``n_steps`` fixed steps from ``(t_start, y)`` on the grid of
-    :func:`~liegroup_int.integrators.drivers.integrate_fixed` (step ``i`` ends at
-    ``t_start + (i + 1) dt``, the last at ``t_stop``), stopping before the first step
-    whose increment is not finite or rotates by more than ``max_angle``.
+def _advance_fixed(data, m, A, b, cc, fsal, y, t_start, t_stop, dt, i_first, n_steps, t_return, max_angle, F, c):
+    """Steps ``i_first .. n_steps - 1`` of the grid of
+    :func:`~liegroup_int.integrators.drivers.integrate_fixed` from ``y`` at its time (step
+    ``i`` ends at ``t_start + (i + 1) dt``, the last at ``t_stop``), stopping before the
+    first step whose increment is not finite or rotates by more than ``max_angle``, or after
+    the first step that ends at or after ``t_return``. ``F (2, m)`` and ``c (3,)`` carry the
+    FSAL memory from call to call (:func:`_carry`; ``c`` zero: none).
 
-    Returns ``(y, steps, status, t, t_fail, h_min, h_max, angle, quadrature, evals)``.
+    Returns ``(y, steps, status, t, t_fail, h_min, h_max, angle, quadrature, evals, y_prev, K,
+    t_prev)``: the last step's start state, stage rates and start time (dense output).
     """
     s = b.shape[0]
-    K, u, zero, F, qs, y0, ys, y1 = _workspace(data, s, m, y)
+    K, u, zero, qs, y0, ys, y1 = _workspace(data, s, m, y)
     Kv, uv, zv, Fv = INC_VIEWS(data, K), INC_VIEW(data, u), INC_VIEW(data, zero), INC_VIEWS(data, F)
-    have_f0, q0, i0 = False, 0.0, 0
-    t, h_min, h_max, quad, evals = t_start, np.inf, 0.0, 0.0, 0
-    for i in range(n_steps):
+    i0, have_f0, q0 = int(c[0]), c[1] != 0.0, c[2]
+    t = t_start + i_first * dt if i_first > 0 else t_start
+    h_min, h_max, quad, evals, t_prev = np.inf, 0.0, 0.0, 0, t
+    for i in range(i_first, n_steps):
         t_next = t_stop if i == n_steps - 1 else t_start + (i + 1) * dt
         h = t_next - t
         q, ev, q_last = _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs)
         evals += ev
         if not _finite(u):
-            return y0, i, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan, quad, evals
+            _carry(c, i0, have_f0, q0)
+            return y0, i - i_first, ADVANCE_NON_FINITE, t, t_next, h_min, h_max, np.nan, quad, evals, y1, K, t_prev
         ang = ANGLE(data, uv)
         if ang > max_angle:
-            return y0, i, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang, quad, evals
+            _carry(c, i0, have_f0, q0)
+            return y0, i - i_first, ADVANCE_ANGLE, t, t_next, h_min, h_max, ang, quad, evals, y1, K, t_prev
         y0, y1 = y1, y0
         if fsal:
             i0, have_f0, q0 = 1 - i0, True, q_last
-        t = t_next
+        t_prev, t = t, t_next
         h_min, h_max = min(h_min, h), max(h_max, h)
         quad += q
-    return y0, n_steps, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad, evals
+        if t >= t_return:
+            _carry(c, i0, have_f0, q0)
+            return y0, i + 1 - i_first, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad, evals, y1, K, t_prev
+    _carry(c, i0, have_f0, q0)
+    return y0, n_steps - i_first, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad, evals, y1, K, t_prev
 
 
 def _error_norm(err, s0, s1, rtol, atol):
@@ -379,33 +401,38 @@ def _error_norm(err, s0, s1, rtol, atol):
     return math.sqrt(acc / err.shape[0])
 
 
-def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate, rtol, atol, h_max,
-                      max_steps_left, max_angle, g):
-    """Accepted and rejected embedded steps from ``(t, y)`` until landing on ``stop``: the
-    loop body of :func:`~liegroup_int.integrators.drivers.integrate_adaptive` for one
-    output time, controller gains ``g`` (:meth:`PIController.gains`) and memory
-    ``err_prev``, ``rate`` (:func:`~.controller.rotation_rate`).
+def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, t_land, h, err_prev, rate, rtol, atol, h_max,
+                      max_steps_left, max_angle, g, F, c):
+    """Accepted and rejected embedded steps from ``(t, y)`` until the first accepted step
+    that ends at or after ``stop``: the loop body of
+    :func:`~liegroup_int.integrators.drivers.integrate_adaptive`, controller gains ``g``
+    (:meth:`PIController.gains`) and memory ``err_prev``, ``rate``
+    (:func:`~.controller.rotation_rate`). Steps are shortened to land on ``t_land`` only
+    (``stop``: every output time is landed on; the final time: outputs come from the dense
+    output). ``F`` and ``c`` carry the FSAL memory as in :func:`_advance_fixed`.
 
     Returns ``(y, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max, status,
-    quadrature, evals)``.
+    quadrature, evals, y_prev, K, t_prev)``: the last accepted step's start state, stage
+    rates and start time.
     """
     s = b.shape[0]
-    K, u, zero, F, qs, y0, ys, y1 = _workspace(data, s, m, y)
+    K, u, zero, qs, y0, ys, y1 = _workspace(data, s, m, y)
     Kv, uv, zv, Fv = INC_VIEWS(data, K), INC_VIEW(data, u), INC_VIEW(data, zero), INC_VIEWS(data, F)
     err_v = np.empty(m)
     sc0 = np.empty(m)
     sc1 = np.empty(m)
-    have_f0, q0, i0 = False, 0.0, 0
-    steps, rejected, attempts, evals, quad = 0, 0, 0, 0, 0.0
+    i0, have_f0, q0 = int(c[0]), c[1] != 0.0, c[2]
+    steps, rejected, attempts, evals, quad, t_prev = 0, 0, 0, 0, 0.0, t
     h_min_acc, h_max_acc = np.inf, 0.0
-    land_tol = 1e-12 * max(1.0, abs(stop))
+    land_tol = 1e-12 * max(1.0, abs(t_land))
     SCALE(data, y0, sc0)
     while True:
         if steps >= max_steps_left:
+            _carry(c, i0, have_f0, q0)
             return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_MAX_STEPS,
-                    quad, evals)
-        land = t + h >= stop - land_tol
-        h_try = stop - t if land else h
+                    quad, evals, y1, K, t_prev)
+        land = t + h >= t_land - land_tol
+        h_try = t_land - t if land else h
         q, ev, q_last = _step(data, A, b, cc, fsal, y0, t, h_try, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0,
                               qs)
         evals += ev
@@ -418,7 +445,7 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate,
             err = np.inf
         rate = _rotation_rate(ang, h_try, max_angle, rate)
         if err <= 1.0 and ang <= max_angle:
-            t = stop if land else t + h_try
+            t_prev, t = t, (t_land if land else t + h_try)
             y0, y1 = y1, y0
             sc0, sc1 = sc1, sc0
             if fsal:
@@ -429,9 +456,10 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate,
             h_max_acc = h_try if h_try > h_max_acc else h_max_acc
             h, err_prev = _h_accepted(err, err_prev, h_try, h_max, g)
             h = _rotation_cap(h, rate, max_angle, g)
-            if land:
+            if land or t >= stop:
+                _carry(c, i0, have_f0, q0)
                 return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_OK,
-                        quad, evals)
+                        quad, evals, y1, K, t_prev)
         else:
             rejected += 1
             if fsal and not have_f0:  # K[0] = f(t, y0): the retry starts from it
@@ -439,13 +467,14 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, h, err_prev, rate,
                 have_f0, q0 = True, qs[0]
             h = _rotation_cap(_h_rejected(err, ang, h_try, max_angle, g), rate, max_angle, g)
             if h < 1e-14 * max(1.0, abs(t)):
+                _carry(c, i0, have_f0, q0)
                 return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc,
-                        ADAPTIVE_UNDERFLOW, quad, evals)
+                        ADAPTIVE_UNDERFLOW, quad, evals, y1, K, t_prev)
 
 
 # ====================================================================== specialization
 _TEMPLATES = (("_step", _step), ("_advance_fixed", _advance_fixed), ("_advance_adaptive", _advance_adaptive))
-_HELPERS = (("_finite", _finite), ("_error_norm", _error_norm), ("_workspace", _workspace))
+_HELPERS = (("_finite", _finite), ("_error_norm", _error_norm), ("_workspace", _workspace), ("_carry", _carry))
 
 
 @dataclass(frozen=True)
@@ -557,31 +586,66 @@ class CompiledStepper:
             entry = self._entries[name] = typed_entry(loop, args, dict(self.cp.functions))
         return entry
 
-    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float) -> Advance:
-        """Up to ``n_steps`` steps from ``(t_start, y)`` on the driver's grid (step ``i``
-        ends at ``t_start + (i + 1) dt``, the last one at ``t_stop``); ``y`` is not
-        modified. See :class:`Advance`."""
+    def memory(self, y) -> FsalMemory:
+        """A new FSAL memory for runs from states like ``y`` (empty: the first call evaluates
+        ``f(t, y)``)."""
+        return FsalMemory(np.empty((2, self.cp.increment_size(self.cp.pack(y)))), np.zeros(3))
+
+    def advance(self, t_start: float, y, t_stop: float, dt: float, n_steps: int, max_angle: float,
+                i_first: int = 0, t_return: float = math.inf, memory: FsalMemory | None = None) -> Advance:
+        """Steps ``i_first .. n_steps - 1`` of the driver's grid (step ``i`` ends at
+        ``t_start + (i + 1) dt``, the last one at ``t_stop``) from ``y`` at the end of step
+        ``i_first - 1`` (at ``t_start`` if 0), stopping after the first step that ends at or
+        after ``t_return``; ``y`` is not modified. ``memory`` (:meth:`memory`) carries FSAL
+        reuse from one call to the next; without it each call starts afresh. See
+        :class:`Advance`."""
         cp, flat = self.cp, self.cp.pack(y)
+        mem = memory if memory is not None else self.memory(y)
         args = (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal, flat, float(t_start),
-                float(t_stop), float(dt), int(n_steps), float(max_angle))
+                float(t_stop), float(dt), int(i_first), int(n_steps), float(t_return), float(max_angle), mem.F, mem.c)
         out = self._loop("advance_fixed", args)(*args)
-        yf, steps, status, t, t_fail, h_min, h_max, ang, quad, evals = out
+        yf, steps, status, t, t_fail, h_min, h_max, ang, quad, evals, y_prev, K, t_prev = out
         return Advance(cp.unpack(yf), float(t), int(steps), float(h_min), float(h_max), _FIXED_STATUS[status],
-                       float(t_fail), float(ang), float(quad), int(evals))
+                       float(t_fail), float(ang), float(quad), int(evals), _LastStep(cp, y_prev, K, t_prev))
 
     def advance_to(self, t, y, stop, h, err_prev, rate, rtol, atol, h_max, max_steps_left, max_angle,
-                   gains) -> AdaptiveAdvance:
-        """Accepted and rejected steps from ``(t, y)`` until landing on ``stop`` (``y`` not
-        modified); ``gains`` from :meth:`~.controller.PIController.gains`. See
+                   gains, t_land: float | None = None, memory: FsalMemory | None = None) -> AdaptiveAdvance:
+        """Accepted and rejected steps from ``(t, y)`` until the first accepted step that
+        ends at or after ``stop``; steps are shortened to land on ``t_land`` only (default
+        ``stop``); ``y`` is not modified; ``gains`` from
+        :meth:`~.controller.PIController.gains`; ``memory`` as in :meth:`advance`. See
         :class:`AdaptiveAdvance`."""
         if self.e is None:
             raise ValueError(f"method {self.tab.name!r} has no embedded pair")
         cp, flat = self.cp, self.cp.pack(y)
+        mem = memory if memory is not None else self.memory(y)
         args = (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.e, self.fsal, flat, float(t),
-                float(stop), float(h), float(err_prev), float(rate), float(rtol), float(atol), float(h_max),
-                int(max_steps_left), float(max_angle), np.asarray(gains, dtype=float))
+                float(stop), float(stop if t_land is None else t_land), float(h), float(err_prev), float(rate),
+                float(rtol), float(atol), float(h_max), int(max_steps_left), float(max_angle),
+                np.asarray(gains, dtype=float), mem.F, mem.c)
         out = self._loop("advance_adaptive", args)(*args)
-        yf, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out
+        yf, t, h, err_prev, rate, steps, rejected, attempts, h_min, h_max_acc, status, quad, evals = out[:13]
         return AdaptiveAdvance(cp.unpack(yf), float(t), float(h), float(err_prev), int(steps), int(rejected),
                                int(attempts), float(h_min), float(h_max_acc), _ADAPTIVE_STATUS[status], float(quad),
-                               int(evals), float(rate))
+                               int(evals), float(rate), _LastStep(cp, *out[13:]))
+
+
+@dataclass(frozen=True)
+class FsalMemory:
+    """The compiled loops' FSAL memory from one call to the next: two vector fields ``F (2,
+    m)`` and ``c = (row of F holding f(t, y), whether it is known, its quadrature rate)``."""
+
+    F: np.ndarray
+    c: np.ndarray
+
+
+class _LastStep:
+    """The last accepted step of a call, as the engine returned it: its start time, start
+    state and stage rates, converted on request (dense output, events)."""
+
+    def __init__(self, cp: CompiledProblem, y_prev, K: np.ndarray, t_prev: float):
+        self._cp, self._y, self.K, self.t = cp, y_prev, K, float(t_prev)
+
+    @property
+    def y(self):
+        return self._cp.unpack(self._y)

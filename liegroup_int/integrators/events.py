@@ -13,6 +13,8 @@ that of the interpolant's root: its error is the dense output's error divided by
 
 from __future__ import annotations
 
+import math
+
 from typing import Callable, NamedTuple
 
 import numpy as np
@@ -151,6 +153,14 @@ class DenseRun:
             return None
         self.stopped = True
         return stop, dense()(stop)
+
+    def next_stop(self, t: float) -> float:
+        """The first step after ``t`` that must be seen ends at or after this time (the
+        compiled engine hands over only that step): ``t`` (every step) while events are
+        tracked or the interpolants kept, else the next output time (``inf`` past the last)."""
+        if self.pieces is not None or self.events is not None:
+            return t
+        return float(self.t_eval[self.i_eval]) if self.i_eval < self.t_eval.size else math.inf
 
     def _observe(self, t: float, y) -> None:
         if self.observer is not None:
