@@ -3,6 +3,8 @@ isospectral flow, and their reduction to Runge-Kutta on R^n."""
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 
@@ -153,3 +155,29 @@ def test_commutator_free_keeps_the_spectrum():
 def test_adaptive_stepping_is_refused_in_one_line():
     with pytest.raises(ValueError, match="method 'cf4' has no embedded pair; give a fixed dt"):
         integrate(lambda t, R: np.ones(3), np.eye(3), (0.0, 1.0), space=SO3, method="cf4", rtol=1e-6)
+
+
+def test_a_perturbed_coefficient_is_refused():
+    """CF4 with 1e-6 moved between its two final exponentials in its second column (the
+    collapsed tableau, hence the classical order 4, and the h^3 Magnus term unchanged):
+    refused by the Lie-group expansion, its h^4 term 1.6e-7 relative; CG4a with one stage
+    weight moved by 1e-6 (16-digit coefficients): refused."""
+    cf = CF_REGISTRY["cf4"]
+    f0, f1 = list(cf.final_rows[0]), list(cf.final_rows[1])
+    f0[1], f1[1] = f0[1] + Fraction(1, 10**6), f1[1] - Fraction(1, 10**6)
+    with pytest.raises(ValueError, match="local error has an h\\^4 term \\(relative size 1.6e-07"):
+        CommutatorFreeTableau("x", "x", cf.c, cf.stage_rows, (tuple(f0), tuple(f1)), 4)
+    cg = CF_REGISTRY["cg4a"]
+
+    def text(x):  # the stored 16-digit floats as the strings the constructor takes
+        if isinstance(x, (tuple, list)):
+            return tuple(text(v) for v in x)
+        return x if isinstance(x, (str, Fraction, int)) else repr(float(x))
+
+    stages = [list(stage) for stage in text(cg.stage_rows)]
+    first = list(stages[2][0])
+    first[0] = repr(float(first[0]) + 1e-6)
+    stages[2][0] = tuple(first)
+    CommutatorFreeTableau("x", "x", text(cg.c), text(cg.stage_rows), text(cg.final_rows), 4)  # as stored: accepted
+    with pytest.raises(ValueError, match="claimed order 4|sum to"):
+        CommutatorFreeTableau("x", "x", text(cg.c), tuple(tuple(st) for st in stages), text(cg.final_rows), 4)
