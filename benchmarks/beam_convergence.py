@@ -75,7 +75,7 @@ def _parse():
     ap.add_argument("--threads", default="1", help="BLAS threads")
     ap.add_argument("--stability-scan", default=None, metavar="SCENE",
                     help="only run the (slow) eigenvalue scan of SCENE over p and n_ctrl")
-    ap.add_argument("--formulation", default="primal", choices=("primal", "mixed", "galerkin"),
+    ap.add_argument("--formulation", default="primal", choices=("primal", "galerkin"),
                     help="beam formulation of the studied discretizations (references stay primal p=8)")
     ap.add_argument("--degrees", type=int, nargs="*", default=None, help="space study: only these degrees")
     ap.add_argument("--smooth-only", action="store_true", help="space study: only the smoothly ramped loads")

@@ -1,4 +1,4 @@
-"""Cost per step and stable step of the three beam formulations, side by side.
+"""Cost per step and stable step of the beam formulations, side by side.
 
     python benchmarks/formulation_cost.py [--scenes pendulum cantilever] [--n-ctrl 21 31 61]
 
@@ -18,7 +18,7 @@ from liegroup_int.integrators import integrate_fixed, resolve_method, spectral_r
 from liegroup_int.scenes import load_scene
 from liegroup_int.scenes.beam import problem
 
-FORMULATIONS = ("primal", "mixed", "galerkin")
+FORMULATIONS = ("primal", "galerkin")
 
 
 def measure(scene: str, n_ctrl: int, formulation: str, steps: int) -> dict:

@@ -59,8 +59,8 @@ def main(argv=None) -> None:
     ap.add_argument("--n-ctrl", type=int, nargs="+", default=[11])
     ap.add_argument("--t-end", type=float, default=30.0)
     ap.add_argument("--plot", type=Path, default=None, help="figure (default: OUT/right_angle_cantilever.png)")
-    ap.add_argument("--formulation", choices=("primal", "mixed", "galerkin"), default=None,
-                    help="space.formulation (default: the scene's, mixed)")
+    ap.add_argument("--formulation", choices=("primal", "galerkin"), default=None,
+                    help="space.formulation (default: the scene's, galerkin)")
     ap.add_argument("--kelvin-voigt", type=float, default=None,
                     help="material.kelvin_voigt [s] (default: the scene's, 3e-4)")
     args = ap.parse_args(argv)

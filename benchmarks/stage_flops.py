@@ -47,7 +47,7 @@ def _parse():
     ap.add_argument("--batch", type=float, default=0.15, help="minimum seconds per timed batch")
     ap.add_argument("--threads", default="1", help="BLAS threads (set before NumPy is imported)")
     ap.add_argument("--ghz", type=float, default=2.6, help="core clock for the flop bounds")
-    ap.add_argument("--formulation", default="galerkin", choices=("primal", "mixed", "galerkin"))
+    ap.add_argument("--formulation", default="galerkin", choices=("primal", "galerkin"))
     return ap.parse_args()
 
 

@@ -137,7 +137,7 @@ def _add_tool_commands(sub) -> None:
     co.add_argument("sets", nargs="*", metavar="SET",
                     help="kernel sets to compile (default: those of the built-in scenes as shipped; "
                          "`--list` names them all)")
-    co.add_argument("--all", action="store_true", help="every kernel set: adaptive pairs and the primal and mixed collocation too")
+    co.add_argument("--all", action="store_true", help="every kernel set: adaptive pairs and the primal collocation too")
     co.add_argument("--jobs", type=int, default=None, metavar="N", help="processes compiling side by side (default: cores)")
     co.add_argument("--list", action="store_true", help="list the kernel sets")
     sc = sub.add_parser("scenes", help="list the built-in scenes")

@@ -7,7 +7,7 @@ run of a kind of problem pays for it. This module does that compilation up front
 process per kernel set, so the sets compile side by side on a machine's cores.
 
 A kernel set is what one family of runs compiles: the beam's Galerkin formulation (the
-default), its primal and mixed collocation (opt-in), the rigid body; each with the engine's
+default), its primal collocation (opt-in), the rigid body; each with the engine's
 fixed-step loop and, on request, its adaptive loop. The loops' machine code does not depend on the scene's numbers (sizes,
 constants, tableau), so warming one scene of a family serves every scene of it.
 """
@@ -45,10 +45,6 @@ KERNEL_SETS: dict[str, KernelSet] = {
                              "beam, primal collocation (the paper's method, opt-in), fixed step"),
     "beam_primal_adaptive": KernelSet("beam_primal_adaptive", "cantilever", ("space.formulation=primal",) + _ADAPTIVE,
                                       "beam, primal collocation, adaptive pairs"),
-    "beam_mixed": KernelSet("beam_mixed", "cantilever", ("space.formulation=mixed",),
-                            "beam, mixed collocation (opt-in), fixed step"),
-    "beam_mixed_adaptive": KernelSet("beam_mixed_adaptive", "cantilever", ("space.formulation=mixed",) + _ADAPTIVE,
-                                     "beam, mixed collocation, adaptive pairs"),
 }
 
 #: What ``liegroup-int compile`` prepares without ``--all``: the built-in scenes as shipped

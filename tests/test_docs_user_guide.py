@@ -101,7 +101,7 @@ def test_user_guide_end_to_end(tmp_path, monkeypatch, capsys):
                  "shapes.png", "shapes.npz", "plot_history.png", "plot_history.pdf", "plot_shapes.png"):
         assert (run / name).exists(), name
     assert list((run / "paraview").glob("beam_*.vtu"))
-    for d in ("runs/pendulum61", "runs/pendulum_mixed", "runs/pendulum_adaptive"):
+    for d in ("runs/pendulum61", "runs/pendulum_primal", "runs/pendulum_adaptive"):
         assert (tmp_path / d / "summary.json").exists(), d
     assert list(tmp_path.glob("studies/heavy_top-converge/study.csv"))
     assert list(tmp_path.glob("studies/pendulum-sweep/study.csv"))

@@ -51,7 +51,7 @@ def test_every_kernel_set_names_a_valid_scene(name):
     ks = KERNEL_SETS[name]
     scene = load_scene(ks.scene, dict(parse_override(o) for o in ks.overrides))
     assert scene.integrator.adaptive == name.endswith("_adaptive")
-    assert (scene.raw.get("space.formulation") == "mixed") == ("mixed" in name)
+    assert (scene.raw.get("space.formulation") == "primal") == ("primal" in name)
 
 
 def test_compile_command_in_process(capsys):
@@ -64,9 +64,9 @@ def test_compile_command_lists_and_refuses(capsys):
     assert main(["compile", "--list"]) == 0
     out = capsys.readouterr().out
     assert all(name in out for name in KERNEL_SETS)
-    assert main(["compile", "beam_mixd"]) == 2
+    assert main(["compile", "beam_primel"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "unknown kernel set 'beam_mixd'" in err and "did you mean 'beam_mixed'" in err
+    assert err.count("\n") == 1 and "unknown kernel set 'beam_primel'" in err and "did you mean 'beam_primal'" in err
     assert main(["compile", "--jobs", "0"]) == 2
     assert "--jobs 0" in capsys.readouterr().err
     with pytest.raises(ValueError, match="unknown kernel set"):

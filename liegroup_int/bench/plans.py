@@ -4,10 +4,9 @@ A plan fixes the span, the output grid on which tip histories are compared, the 
 run (RKMK6 on a finer discretization of the default formulation, its space error bounded
 by the same run on the next coarser mesh), our runs and the peer's
 resolutions. Our runs are of two kinds: every method at its stable step on every
-discretization, once per spatial formulation (``primal``: the paper's collocation;
-``mixed``: locking-free mixed collocation, with the least Kelvin-Voigt damping that
-removes its growing linearized modes at rest), whose error against the fine reference is
-mostly space error, the fair comparison with a peer; and a time study on one primal
+discretization, once per spatial formulation (``galerkin``: the default weak form;
+``primal``: the paper's collocation), whose error against the fine reference is mostly
+space error, the fair comparison with a peer; and a time study on one primal
 discretization (the paper's p = 4, n = 30): every method over fractions of its stable step
 and the adaptive pairs over tolerances, whose *time* error is also measured against an
 RKMK6 run on that same discretization (the paper's Fig. 4(b), 5(b)). ``quick`` plans are
@@ -39,11 +38,9 @@ class Plan:
     discretizations : tuple of (int, int)
         ``(degree, n_ctrl)`` of our runs at each method's stable step.
     formulations : tuple of str
-        Spatial formulations of those runs (``"primal"``, ``"mixed"``, ``"galerkin"``;
+        Spatial formulations of those runs (``"primal"``, ``"galerkin"``;
         ``space.formulation``), or a variant of :data:`VARIANTS` (``"galerkin-ri"``).
-        Primal runs are undamped; mixed runs carry the Kelvin-Voigt damping sized from the
-        dense spectrum at rest (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`).
-        The time study is primal whatever this says.
+        Every run is undamped. The time study is primal whatever this says.
     time_study : (int, int)
         ``(degree, n_ctrl)`` of the time study (primal).
     methods : tuple of str
@@ -70,7 +67,7 @@ class Plan:
     reference_y: float
     discretizations: tuple[tuple[int, int], ...]
     reference_formulation: str = "galerkin"
-    formulations: tuple[str, ...] = ("primal", "mixed", "galerkin")
+    formulations: tuple[str, ...] = ("primal", "galerkin")
     time_study: tuple[int, int] = (4, 31)
     methods: tuple[str, ...] = ("rkmk2", "rkmk3", "rkmk4", "rkmk6", "rkmk65", "strang")
     dt_fractions: tuple[float, ...] = (1.0, 0.5, 0.25, 0.125)
@@ -113,23 +110,20 @@ VARIANTS: dict[str, dict] = {
 #: stable-step gain on the helix is 1.03x only). Every
 #: discretization here is stable at rest in primal collocation (max Re lambda of the
 #: linearized operator < 1e-3 1/s); some nearby ones are not (cantilever p = 8, n_ctrl = 61
-#: or 71: +1e4 1/s; see docs/verification.md, "Stability of the semi-discretization"). Mixed
-#: collocation mostly has a weakly growing pair (1 to 1e3 1/s), removed by damping with
-#: tau of 1e-9 to 1e-6 s (zeta1 < 1e-5), except pendulum p = 8, n_ctrl = 41: tau = 1.1e-4 s,
-#: whose viscous eigenvalue sets |lambda|max (5.2e5 against 6.9e4 1/s undamped). The helix is
-#: linearized about its spinning start: max Re lambda is 0.051 1/s in Galerkin on every mesh
-#: (0.054 mixed; a mode of the spinning rod, not of the mesh), 0.12 to 2.2 1/s in primal
+#: or 71: +1e4 1/s; see docs/verification.md, "Stability of the semi-discretization"). The
+#: helix is linearized about its spinning start: max Re lambda is 0.051 1/s in Galerkin on
+#: every mesh (a mode of the spinning rod, not of the mesh), 0.12 to 2.2 1/s in primal
 #: collocation (a factor e^1.1 at most over the 0.5 s).
 PLANS: dict[str, Plan] = {
     "cantilever": Plan(
         scene="cantilever", t_end=0.05, every=2.5e-4, reference=(8, 51), reference_y=0.4,
         discretizations=((3, 11), (4, 11), (4, 15), (4, 21), (4, 31), (4, 41), (6, 21), (6, 31), (6, 41)),
-        formulations=("primal", "mixed", "galerkin", "galerkin-ri"),
+        formulations=("primal", "galerkin", "galerkin-ri"),
     ),
     "pendulum": Plan(
         scene="pendulum", t_end=1.0, every=5e-3, reference=(8, 81), reference_y=0.4,
         discretizations=((4, 17), (4, 18), (4, 21), (4, 31), (4, 61), (6, 21), (6, 31), (6, 41), (6, 61), (8, 41)),
-        formulations=("primal", "mixed", "galerkin", "galerkin-ri"),
+        formulations=("primal", "galerkin", "galerkin-ri"),
     ),
     "spinning_helix": Plan(
         scene="spinning_helix", t_end=0.5, every=5e-3, reference=(8, 101), reference_y=0.4,

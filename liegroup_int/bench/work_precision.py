@@ -12,10 +12,7 @@ For a :class:`~liegroup_int.bench.plans.Plan`:
    stable step (:func:`~liegroup_int.integrators.stable_step` on the spectral radius at
    the initial state); on the primal time-study discretization every method over fractions
    of its stable step and every embedded pair x tolerance (step capped by the stable step).
-   Primal runs are undamped; mixed runs carry the least Kelvin-Voigt damping that leaves
-   no growing linearized mode at rest
-   (:func:`~liegroup_int.problems.beam.damping.size_kelvin_voigt`, its ``tau`` reported per
-   discretization), and their stable step is taken on the damped spectrum.
+   Every run is undamped.
 3. The peer: PyElastica ``PositionVerlet`` at each element count, at the largest step of a
    ladder that stays finite over the span (its "own stable dt"); optionally its
    discretization of our continuum model at the finest count.
@@ -65,7 +62,6 @@ from ..tableaux import COMPOSITIONS
 from ..iga.quadrature import DEFAULT_RULE
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
-from .beam_internals import size_kelvin_voigt
 from .plans import VARIANTS, Plan
 
 #: Fixed-step factors tried for the peer's stable step, largest first (times its estimate).
@@ -78,7 +74,7 @@ class Run:
 
     ``family`` groups runs in tables and plots ("RKMK4", "RKMK65 adaptive",
     "PyElastica"); ``resolution`` is ``"p4 n31"`` or ``"400 el"``; ``formulation`` is
-    ``"primal"`` or ``"mixed"`` for ours (None for the peer), ``kelvin_voigt`` the
+    ``"primal"`` or ``"galerkin"`` for ours (None for the peer), ``kelvin_voigt`` the
     retardation time of the run [s]; ``status`` is ``"ok"``, ``"skipped"`` (predicted CPU
     over budget) or the one-line failure.
     """
@@ -138,7 +134,7 @@ def _store(cache: Path | None, key: str, run: Run) -> None:
 def _problem(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str,
              formulation: str = "primal"):
     # the scene's own step and output keys are replaced (the benchmark chooses its steps);
-    # built without sizing ``kelvin_voigt = "auto"`` (undamped; :func:`prepare` sizes mixed)
+    # built without sizing ``kelvin_voigt = "auto"`` (undamped)
     return scene_problem(load_scene(scene, {"space.degree": degree, "space.n_ctrl": n_ctrl, "t_end": t_end,
                                             "output.every": every, "integrator.dt": every,
                                             "integrator.backend": backend,
@@ -154,16 +150,13 @@ def fit_step(dt: float, every: float) -> float:
 class Discretized:
     """A built problem with its spectral radius, the largest real part of its linearized
     spectrum at the initial state (nan if too large for a dense eigenvalue problem) and
-    the measured cost per stage (CPU s); for mixed collocation the damping report
-    (``damping``), or why the damping could not be sized (``refused``, and no problem)."""
+    the measured cost per stage (CPU s)."""
 
     problem: object
     lam_max: float
     stage_cost_s: float
     max_real: float = math.nan
     formulation: str = "primal"
-    damping: object = None
-    refused: str | None = None
 
     @property
     def tau(self) -> float:
@@ -173,22 +166,9 @@ class Discretized:
 
 def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, backend: str,
             formulation: str = "primal") -> Discretized:
-    """Build, compile (warm-up steps), measure ``|lambda|max`` and the cost of a stage.
-
-    ``formulation = "mixed"``: damped by :func:`size_kelvin_voigt` first (the spectral
-    radius, hence the stable steps, are those of the damped problem); if the sizing refuses
-    (the damping would be heavy), a :class:`Discretized` without problem saying why.
-    """
+    """Build, compile (warm-up steps), measure ``|lambda|max`` and the cost of a stage."""
     pb = _problem(scene, degree, n_ctrl, t_end, every, backend, formulation)
     y0 = pb.initial_state()
-    report = None
-    if formulation == "mixed":
-        try:
-            report = size_kelvin_voigt(pb.with_kelvin_voigt, y0)
-        except ValueError as exc:
-            return Discretized(None, math.nan, math.nan, formulation=formulation,
-                               refused=f"Kelvin-Voigt sizing refused: {exc}")
-        pb = pb.with_kelvin_voigt(report.tau)
     lam = spectral_radius(pb, 0.0, y0)
     tab = resolve_method("rkmk4")
     dt = 0.5 / lam
@@ -201,7 +181,7 @@ def prepare(scene: str, degree: int, n_ctrl: int, t_end: float, every: float, ba
         max_real = growth_check(pb, 0.0, y0, t_end).max_real
     except ValueError:  # too many unknowns for the dense check
         max_real = math.nan
-    return Discretized(pb, lam, cost, max_real, formulation, report)
+    return Discretized(pb, lam, cost, max_real, formulation)
 
 
 def _record(pb, rec_t: list, rec_tip: list) -> Callable:
@@ -411,7 +391,6 @@ class Result:
     lam_max: dict[str, tuple[float, float, float]]
     peer_version: str | None = None
     peer_note: str | None = None
-    damping: dict[str, dict] = field(default_factory=dict)
     reference_coarse: Run | None = None
 
     def reference_bound(self) -> float:
@@ -499,12 +478,8 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     def disc(p: int, n: int, form: str = "primal") -> Discretized:
         if (p, n, form) not in built:
             built[(p, n, form)] = d = prepare(plan.scene, p, n, plan.t_end, plan.every, backend, form)
-            if d.refused:
-                _say(log, f"  p={p} n_ctrl={n} {form}: {d.refused}")
-            else:
-                kv = f", Kelvin-Voigt tau = {d.tau:.3g} s (zeta1 = {d.damping.zeta1:.2g})" if d.damping else ""
-                _say(log, f"  p={p} n_ctrl={n} {form}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = "
-                          f"{d.max_real:.3g} 1/s{kv}, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
+            _say(log, f"  p={p} n_ctrl={n} {form}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = "
+                      f"{d.max_real:.3g} 1/s, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
         return built[(p, n, form)]
 
     def cached(key_parts, make: Callable[[], Run], tag: tuple = OURS_TAG) -> Run:
@@ -576,11 +551,6 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
         for m in plan.methods:
             if m in COMPOSITIONS and not hasattr(d.problem, "split_steps"):
                 continue  # splitting methods: the Galerkin form's kick-drift-kick only
-            if d.refused:
-                ours[_key(m, form, p, n, "refused")] = r = Run(m.upper(), res, math.nan, form,
-                                                               status=f"failed: {d.refused}")
-                _say(log, _describe(r))
-                continue
             dt_stable = (stable_split_step(COMPOSITIONS[m], d.lam_max) if m in COMPOSITIONS
                          else stable_step(resolve_method(m), d.lam_max, plan.t_end)).dt
             for f in fractions:
@@ -609,11 +579,9 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
     # 3. peer
     peers, version, note = _peer_runs(plan, cached, ref, log) if peer and plan.peer_elements else ([], None, None)
     lam = {f"p{p} n{n} {form}": (d.lam_max, d.max_real, d.tau) for (p, n, form), d in built.items()}
-    damping = {f"p{p} n{n} {form}": (d.damping.as_dict() if d.damping else {"refused": d.refused})
-               for (p, n, form), d in built.items() if form == "mixed"}
     mine = list(ours.values())
     bound = _bound(coarse, check)
-    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers, bound), lam, version, note, damping, coarse)
+    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers, bound), lam, version, note, coarse)
 
 
 # ----------------------------------------------------------------------------- reporting
@@ -656,13 +624,6 @@ def markdown(result: Result) -> str:
                  f"(which is {_fmt(tr.error, '.2e')} m from the reference: the space error of {tr.resolution}).")
     lines.append("Linearized spectrum at the initial state, |lambda|max (max Re lambda) [1/s]: "
                  + ", ".join(f"{k}: {v[0]:.3g} ({v[1]:.2g})" for k, v in result.lam_max.items()) + ".")
-    if result.damping:
-        lines.append("Mixed runs: Kelvin-Voigt retardation time sized at rest (least that leaves no growing mode), "
-                     "tau [s] (damping ratio on the first mode; undamped max Re lambda [1/s]): "
-                     + ", ".join(f"{k.removesuffix(' mixed')}: " + (
-                         f"refused ({v['refused']})" if "refused" in v else
-                         f"{v['tau']:.2g} ({v['zeta1']:.1g}; {v['max_real_undamped']:.2g})")
-                         for k, v in result.damping.items()) + ". Primal runs are undamped.")
     lines += ["", "| run | formulation | resolution | dt [s] | rtol | steps | rejected | CPU [s] | max tip error [m] | "
               "time error [m] | status |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in result.ours + result.peers:
@@ -711,8 +672,7 @@ def _envelope(runs: list[Run]) -> tuple[list[float], list[float]]:
 
 def plot(result: Result, path: Path) -> Path:
     """Two log-log panels. Left: error against the fine reference over CPU time, one colour
-    per method, one marker per resolution, filled for primal and open for mixed
-    collocation, grey for Galerkin, the lower envelope of each formulation in grey,
+    per method, one marker per resolution, filled for primal collocation, grey for Galerkin, the lower envelope of each formulation in grey,
     PyElastica in black.
     Right: the time study, time error against CPU time per method (the paper's Fig. 4(b),
     5(b))."""
@@ -728,7 +688,7 @@ def plot(result: Result, path: Path) -> Path:
     markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*hPX"))
     forms = list(dict.fromkeys(r.formulation for r in result.ours))
     # line style, marker face (None: filled)
-    styles = {"primal": ("-", None), "mixed": ("--", "white"), "galerkin": (":", "0.8")}
+    styles = {"primal": ("-", None), "galerkin": (":", "0.8")}
     groups: dict[tuple[str, str, str], list[Run]] = {}
     for r in ok:
         groups.setdefault((r.family, r.formulation, r.resolution), []).append(r)
@@ -745,8 +705,7 @@ def plot(result: Result, path: Path) -> Path:
         xs, ys = _envelope([r for r in ok if r.formulation == form])
         if xs:
             ls, face = styles.get(form, ("-", None))
-            name = form + {"mixed": " (open markers, Kelvin-Voigt damped)",
-                           "galerkin": " (grey markers, undamped)"}.get(form, " (filled markers)")
+            name = form + {"galerkin": " (grey markers, undamped)"}.get(form, " (filled markers)")
             ax.loglog(xs, ys, color="0.4", ls=ls, lw=2.2, alpha=0.45, label=f"{name}: best within CPU")
     for fam, style in (("PyElastica", "k-"), ("PyElastica, our continuum model", "k--")):
         pr = sorted((r for r in result.peers if r.family == fam and r.status == "ok" and np.isfinite(r.error)),
@@ -791,7 +750,7 @@ def write(result: Result, out: Path) -> list[Path]:
                "reference_coarse": None if result.reference_coarse is None else result.reference_coarse.row(),
                "reference_error_bound": result.reference_bound(),
                "time_reference": result.time_reference.row(),
-               "lambda_max": result.lam_max, "damping": result.damping, "ours": [r.row() for r in result.ours],
+               "lambda_max": result.lam_max, "ours": [r.row() for r in result.ours],
                "peers": [r.row() for r in result.peers], "ratios": result.ratios,
                "peer_version": result.peer_version, "peer_note": result.peer_note}
     tmp = js.with_suffix(".json.tmp")

@@ -97,9 +97,8 @@ KEYS = {
         Key("space.degree", "int", 4, "spline degree p (2 to 10)", "", _int_between(2, 10)),
         Key("space.formulation", "str", "galerkin",
             "balance laws: the weak form (galerkin, the default: energy-conserving, locking-free, no spurious "
-            "growing mode), the paper's primal collocation (primal), or the locking-free mixed collocation "
-            "(resultant splines)",
-            choices=("primal", "mixed", "galerkin")),
+            "growing mode), or the paper's primal collocation (primal)",
+            choices=("primal", "galerkin")),
         Key("space.quadrature", "str", DEFAULT_RULE,
             "quadrature rule of the galerkin stiffness (auto: gauss-spline for p = 3..7 where it is found, p = 3..6 "
             "always, else gauss-p; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
@@ -1067,7 +1066,7 @@ REMEDY_GALERKIN = ("try a finer space.n_ctrl (to resolve the motion), a smaller 
 
 
 def describe_formulation(formulation: str) -> str:
-    """``"primal collocation"``, ``"mixed collocation"`` or ``"galerkin"``."""
+    """``"primal collocation"`` or ``"galerkin"``."""
     return formulation if formulation == "galerkin" else f"{formulation} collocation"
 
 

@@ -131,7 +131,7 @@ class Stability:
     Attributes
     ----------
     describe : str
-        The discretization in a few words, for messages ("mixed collocation, p=4, n_ctrl=31").
+        The discretization in a few words, for messages ("primal collocation, p=4, n_ctrl=31").
     remedy : str
         What to try when an oscillatory mode of the discretization grows.
     remedy_real : str

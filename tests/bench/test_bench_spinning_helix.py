@@ -21,14 +21,14 @@ def test_helix_plans():
     full, short = plan_for("spinning_helix"), plan_for("spinning_helix", quick=True)
     assert full is PLANS["spinning_helix"] and short is QUICK["spinning_helix"]
     assert (full.t_end, full.every, full.reference, full.reference_formulation) == (0.5, 5e-3, (8, 101), "galerkin")
-    assert full.formulations == ("primal", "mixed", "galerkin") and full.peer_elements == (50, 100, 200, 400)
+    assert full.formulations == ("primal", "galerkin") and full.peer_elements == (50, 100, 200, 400)
     assert short.t_end == 0.1 and short.reference == (6, 41) and short.peer_elements == (50, 100)
 
 
 def test_helix_quick_plan_ours(quick):
     """Every run of ours finishes; measured (errors against Galerkin p6 n41, which is 9.8e-7 m
     from Galerkin p8 n61 over this span, though its stated bound, its distance to p6 n23, is
-    1.7e-5 m): Galerkin p4 n21 / n31 5.3e-5 / 4.0e-6 m, mixed 9.4e-5 / 1.6e-5 m, primal
+    1.7e-5 m): Galerkin p4 n21 / n31 5.3e-5 / 4.0e-6 m, primal
     1.7e-3 / 3.6e-4 m (primal collocation locks on the curved rod)."""
     res = quick
     assert all(r.status == "ok" and np.isfinite(r.error) for r in res.ours), [r.status for r in res.ours]

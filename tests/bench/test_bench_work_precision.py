@@ -22,7 +22,7 @@ from liegroup_int.bench.work_precision import _reference_lines
 from liegroup_int.cli import main
 
 # Pendulum over 20 ms: the smallest plan that still has a space ladder (n_ctrl 11, 21) in
-# both formulations (mixed p4 n21 needs damping: a pair grows at 3.7 1/s undamped), a time
+# both formulations, a time
 # study on primal p=4, n_ctrl=15 (RKMK4 at 1, 1/2, 1/4 of its stable step) and an adaptive
 # pair; RKMK6 reference on primal p=6, n_ctrl=21 (its space error bounded by p=6, n_ctrl=13).
 # No CPU budget: a budget would turn runs
@@ -96,31 +96,6 @@ def test_reference_margin_rule(best, warned):
         assert "The reference is 99x more accurate than the best run" in text
 
 
-def test_tiny_plan_runs_the_mixed_formulation(tiny):
-    _, res = tiny
-    mixed = {r.resolution: r for r in res.ours if r.formulation == "mixed"}
-    # one run per discretization x method at its stable step; the time study stays primal
-    assert sorted(mixed) == ["p4 n11", "p4 n21"]
-    assert sum(r.formulation == "mixed" for r in res.ours) == 2
-    for r in mixed.values():
-        assert r.status == "ok" and r.family == "RKMK4" and r.steps > 0
-        assert np.all(np.isfinite(r.tip)) and np.isfinite(r.error) and r.error > 0
-        assert math.isnan(r.time_error)
-    # the damping is sized per discretization: none needed at n_ctrl = 11, some at 21
-    # (measured tau = 8.8e-7 s), light on the first mode, and reported
-    assert mixed["p4 n11"].kelvin_voigt == 0.0
-    assert 0.0 < mixed["p4 n21"].kelvin_voigt < 1e-4
-    assert res.damping["p4 n21 mixed"]["tau"] == mixed["p4 n21"].kelvin_voigt
-    assert res.damping["p4 n21 mixed"]["zeta1"] < 1e-3
-    assert res.lam_max["p4 n21 mixed"][2] == mixed["p4 n21"].kelvin_voigt
-    assert all(r.kelvin_voigt == 0.0 for r in res.ours if r.formulation == "primal")
-    # locking-free: at n_ctrl = 11 the mixed tip is measured 4.7x closer to the reference
-    # (1.0e-5 against 4.8e-5 m); the primal and mixed runs are distinct runs, not one cached twice
-    primal = {r.resolution: r for r in res.ours if r.formulation == "primal" and r.family == "RKMK4"}
-    assert mixed["p4 n11"].error < 0.5 * primal["p4 n11"].error
-    assert not np.array_equal(mixed["p4 n21"].tip, primal["p4 n21"].tip)
-
-
 def test_tiny_plan_runs_the_galerkin_formulation(tiny):
     """The Galerkin runs: one per discretization, undamped (its spectrum at rest is clean,
     so nothing is sized), at their own stable steps."""
@@ -131,7 +106,10 @@ def test_tiny_plan_runs_the_galerkin_formulation(tiny):
     for r in gal.values():
         assert r.status == "ok" and r.family == "RKMK4" and r.steps > 0 and r.kelvin_voigt == 0.0
         assert np.isfinite(r.error) and r.error > 0
-    assert "p4 n21 galerkin" not in res.damping
+    # the primal and Galerkin runs are distinct runs, not one cached twice
+    primal = {r.resolution: r for r in res.ours if r.formulation == "primal" and r.family == "RKMK4"}
+    assert not np.array_equal(gal["p4 n21"].tip, primal["p4 n21"].tip)
+    assert all(r.kelvin_voigt == 0.0 for r in res.ours)
 
 
 def test_outputs_and_cache(tiny):
@@ -140,11 +118,10 @@ def test_outputs_and_cache(tiny):
     assert [p.name for p in made] == ["work_precision.md", "work_precision.json", "work_precision.png"]
     data = json.loads((out / "work_precision.json").read_text())
     assert len(data["ours"]) == len(res.ours) and data["peers"] == []
-    assert {r["formulation"] for r in data["ours"]} == {"primal", "mixed", "galerkin"}
-    assert data["damping"]["p4 n21 mixed"]["tau"] > 0
+    assert {r["formulation"] for r in data["ours"]} == {"primal", "galerkin"}
     md = (out / "work_precision.md").read_text()
     assert "time error" in md and "p4 n15" in md
-    assert "| RKMK4 | mixed | p4 n21 |" in md and "| RKMK4 | primal | p4 n21 |" in md
+    assert "| RKMK4 | galerkin | p4 n21 |" in md and "| RKMK4 | primal | p4 n21 |" in md
     again = work_precision(TINY, out, peer=False, log=None)
     assert all(r.cached for r in again.ours)
     assert [r.error for r in again.ours] == [r.error for r in res.ours]
@@ -206,14 +183,14 @@ def test_certified_ratios_add_the_reference_bound():
 
 def test_ratios_per_formulation():
     ours = [Run("RKMK4", "a", 1e-5, "primal", cpu_s=1.0, error=1e-3),
-            Run("RKMK4", "a", 1e-5, "mixed", 1e-6, cpu_s=1.2, error=1e-5),
-            Run("RKMK4", "b", 1e-5, "mixed", 1e-6, cpu_s=20.0, error=1e-7)]
+            Run("RKMK4", "a", 1e-5, "galerkin", cpu_s=1.2, error=1e-5),
+            Run("RKMK4", "b", 1e-5, "galerkin", cpu_s=20.0, error=1e-7)]
     peers = [_run("PyElastica", "400 el", 1e-6, 10.0, 2e-3)]
     q = {r["formulation"]: r for r in ratios(ours, peers)}
-    assert sorted(q) == ["mixed", "primal"]
+    assert sorted(q) == ["galerkin", "primal"]
     assert q["primal"]["cpu_ratio"] == pytest.approx(10.0) and q["primal"]["accuracy_ratio"] == pytest.approx(2.0)
-    assert q["mixed"]["cpu_ratio"] == pytest.approx(10.0 / 1.2)  # 'b' is more accurate but over the peer's CPU
-    assert q["mixed"]["accuracy_ratio"] == pytest.approx(2e-3 / 1e-5)
+    assert q["galerkin"]["cpu_ratio"] == pytest.approx(10.0 / 1.2)  # 'b' is more accurate but over the peer's CPU
+    assert q["galerkin"]["accuracy_ratio"] == pytest.approx(2e-3 / 1e-5)
 
 
 def test_tip_error_needs_the_same_grid():
@@ -254,7 +231,7 @@ def test_plans_check_themselves():
     with pytest.raises(ValueError, match="formulations"):
         Plan(scene="x", t_end=1.0, every=0.5, reference=(4, 31), reference_y=0.4, discretizations=((4, 21),),
              formulations=("primal", "hybrid"))
-    assert all(plan_for(s, quick=q).formulations == ("primal", "mixed", "galerkin", "galerkin-ri")
+    assert all(plan_for(s, quick=q).formulations == ("primal", "galerkin", "galerkin-ri")
                for s in ("pendulum", "cantilever") for q in (False, True))
     assert plan_for("cantilever").t_end == 0.05 and plan_for("pendulum").t_end == 1.0
     assert plan_for("pendulum", t_end=0.2).every == 5e-3

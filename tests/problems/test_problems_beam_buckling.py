@@ -173,9 +173,9 @@ def test_buckle_command(tmp_path, capsys):
 
 
 def test_buckle_refuses_collocation_and_unconfirmed_loads(tmp_path, capsys):
-    assert main(["buckle", "column", "--set", "space.formulation=mixed", "--out", str(tmp_path / "c")]) == 2
+    assert main(["buckle", "column", "--set", "space.formulation=primal", "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and 'buckle needs space.formulation = "galerkin" (got "mixed")' in err
+    assert err.count("\n") == 1 and 'buckle needs space.formulation = "galerkin" (got "primal")' in err
     assert main(["buckle", "column", "--n", "0"]) == 2
     assert "--n 0" in capsys.readouterr().err
     # the 45-degree bend under its transverse tip force does not buckle: the secant

@@ -26,8 +26,7 @@ def _extremum(t, y, lo, hi, sign):
 def test_right_angle_cantilever_matches_the_published_extrema(tmp_path):
     """The built-in scene as shipped (Galerkin, undamped, p = 4, 11 control points per leg,
     dt auto) over 0-17 s. Measured: elbow +5.51 at 3.09 s and -4.06 at 10.87 s, tip +8.25 at
-    7.43 s and -9.73 at 15.85 s (docs/verification.md section 7b; mixed collocation with
-    kelvin_voigt = 3e-4: within 0.01). Margins: 0.25 in displacement and
+    7.43 s and -9.73 at 15.85 s (docs/verification.md section 7b). Margins: 0.25 in displacement and
     0.3 s in time, the digitization's accuracy (about 0.2 either way) plus the spread of
     published reproductions (Exudyn's comments give the elbow minimum as -4.07, 0.2 below
     the digitized curve)."""
@@ -85,10 +84,10 @@ def test_frame_scene_errors(over, match):
         load_scene("right_angle_cantilever", over)
 
 
-#: Largest relative changes over 5-10 s allowed per formulation (energy, momentum, angular
-#: momentum): 4x the measured 2.5e-4, 1.3e-5, 4.0e-5 (mixed) and 1.1e-12, 1.7e-15, 1.3e-9
-#: (Galerkin, the scene as shipped; 10x on the round-off level momentum).
-SPAGHETTI = {"mixed": (1e-3, 5.2e-5, 1.6e-4), "galerkin": (4.4e-12, 2e-14, 5.2e-9)}
+#: Largest relative changes over 5-10 s allowed (energy, momentum, angular momentum): 4x the
+#: measured 1.1e-12, 1.7e-15, 1.3e-9 (Galerkin, the scene as shipped; 10x on the round-off
+#: level momentum).
+SPAGHETTI = {"galerkin": (4.4e-12, 2e-14, 5.2e-9)}
 
 
 @pytest.mark.parametrize("formulation", sorted(SPAGHETTI))
@@ -113,17 +112,19 @@ def test_flying_spaghetti_keeps_energy_and_momenta_after_the_pulse(tmp_path, for
 
 def test_frame_outputs_read_back(tmp_path):
     """The frame's ParaView series (meshio) and HDF5 snapshots hold both patches: 11 + 11
-    collocation points, the elbow twice at one place, with the section forces there; the
-    force balance of the joint, n_b - n_a + F = 0, holds to the collocation's error
-    (the enhanced-collocation rows enforce it weakly: measured at most 6.4e-3 of the
-    largest section force over 0-0.4 s; 1.5e-2 allowed)."""
+    collocation points (primal collocation), the elbow twice at one place, with the section
+    forces there; the force balance of the joint, n_b - n_a + F = 0, holds to the
+    collocation's error, which is coarse at 11 points per leg (the enhanced-collocation rows
+    enforce it weakly: measured at most 0.144 of the largest section force over 0-0.4 s, at
+    0.1 s, falling to 0.073 at 0.4 s; 0.2 allowed: a sign or an offset error in the joint's
+    forces is of order 1)."""
     import glob
 
     import h5py
     import meshio
 
     run_scene(load_scene("right_angle_cantilever", {"t_end": 0.4, "output.every": 0.1, "output.plots": False,
-                                                    "output.fields": ["n"], "space.formulation": "mixed",
+                                                    "output.fields": ["n"], "space.formulation": "primal",
                                                     "material.kelvin_voigt": 3e-4}), tmp_path)
     m = meshio.read(sorted(glob.glob(str(tmp_path / "paraview" / "*.vtu")))[-1])
     assert m.points.shape == (22, 3) and m.point_data["n"].shape == (22, 3)
@@ -133,7 +134,7 @@ def test_frame_outputs_read_back(tmp_path):
         ts, ns = f["snapshots"]["t"][:], f["snapshots"]["section_n"][:]
     for t, n in zip(ts, ns):
         force = np.array([0.0, 0.0, 50.0 * t])  # the pulse at t < 1 s
-        assert np.linalg.norm(n[11] - n[10] + force) <= 1.5e-2 * max(np.max(np.abs(n)), 1.0)
+        assert np.linalg.norm(n[11] - n[10] + force) <= 0.2 * max(np.max(np.abs(n)), 1.0)
 
 
 def test_members_with_their_own_sections():
@@ -144,7 +145,7 @@ def test_members_with_their_own_sections():
               "section": {"EI1": 200.0, "rhoA": 0.5}}]
     sim = KINDS["beam"].build(load_scene("right_angle_cantilever", {
         "beams": beams, "point_loads": [{"s": 0.8, "force": [0, 1.0, 0]}], "integrator.backend": "numpy",
-        "space.formulation": "mixed"}))  # per collocation point: mu, CN, CM of its member
+        "space.formulation": "primal"}))  # per collocation point: mu, CN, CM of its member
     pb = sim.problem
     assert pb.space.offsets == (0, 11, 17, 23)  # the arm split at s = 4 m into 6 + 6
     assert np.all(pb.mu[:11] == 1.0) and np.all(pb.mu[11:] == 0.5)

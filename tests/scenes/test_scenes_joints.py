@@ -242,7 +242,7 @@ def _joints(*entries):
      r"joints\[0\]: key 'ends': 'post.start' is supported \(bc.start = 'clamped'\); a joint takes free ends only"),
     (_joints({"ends": T_JOINT, "kind": "slider"}), r"joints\[0\]: key 'kind' = 'slider': expected one of"),
     (_joints({"ends": T_JOINT, "knd": "ball"}), r"joints\[0\]: unknown key 'knd'"),
-    ({"space.formulation": "mixed", "material.kelvin_voigt": 0.0},
+    ({"space.formulation": "primal", "material.kelvin_voigt": 0.0},
      r"the collocation formulations join patches in a chain only"),
     ({"point_loads": [{"s": 0.5, "force": [0, 0, 1.0]}]},
      r"point_loads\[0\]: s = 0.5 is a member end; with \[\[joints\]\] a point load acts inside a member"),

@@ -1,4 +1,4 @@
-"""One constructor for every beam formulation: collocation (primal, mixed) or Galerkin."""
+"""One constructor for every beam formulation: primal collocation or Galerkin."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ def beam_problem(space, constants, bcs: BoundaryConditions = BoundaryConditions(
                  kelvin_voigt: float = 0.0, formulation: str = "galerkin", quadrature: str = DEFAULT_RULE,
                  bodies: tuple = ()):
     """A :class:`~.galerkin.GalerkinBeamProblem` (``"galerkin"``, the default, with its
-    ``quadrature`` rule and end ``bodies``) or a :class:`~.problem.BeamProblem` (``"primal"``,
-    ``"mixed"`` collocation) with these arguments, as ``space.formulation`` of a scene."""
+    ``quadrature`` rule and end ``bodies``) or a :class:`~.problem.BeamProblem` (``"primal"``
+    collocation) with these arguments, as ``space.formulation`` of a scene."""
     if formulation not in ALL_FORMULATIONS:
         raise ValueError(f"formulation: expected one of {', '.join(ALL_FORMULATIONS)}, got {formulation!r}")
     if formulation == "galerkin":

@@ -172,7 +172,6 @@ class GalerkinBeamProblem(BeamBase):
     """
 
     formulation = "galerkin"
-    mixed = False
     state_cls = GalerkinBeamState
 
     def __init__(self, space: CollocationSpace, constants: SectionConstants,

@@ -26,14 +26,14 @@ import numpy as np
 from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3
 from ...iga import CollocationSpace
 from .base import SECTION_FIELDS, BeamBase
-from .kinematics import curvature_update, jr_times, rot, rot_T, strain_rates, strains
+from .kinematics import curvature_update, rot, rot_T, strain_rates, strains
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
 
 C_STAR = 4.0
 
 #: Spatial discretizations of the balance laws (:class:`BeamProblem` ``formulation``).
-FORMULATIONS = ("primal", "mixed")
-#: Every beam formulation: the two collocation ones and the weak form
+FORMULATIONS = ("primal",)
+#: Every beam formulation: the collocation one and the weak form
 #: (:class:`~.galerkin.GalerkinBeamProblem`, ``"galerkin"``).
 ALL_FORMULATIONS = FORMULATIONS + ("galerkin",)
 
@@ -132,15 +132,9 @@ class BeamProblem(BeamBase):
         Default 0 (conservative). It removes the spurious growing modes of the
         collocation operator (docs/verification.md, "Stability of the
         semi-discretization"): ``tau ~ 0.3 / |lambda|max`` suffices in every measured case.
-    formulation : {"primal", "mixed"}
+    formulation : {"primal"}
         ``"primal"`` (the paper's method): the balance laws use the analytic
         s-derivatives of the pointwise resultants, which needs ``c_ss`` and ``K_s``.
-        ``"mixed"`` (locking-free, Auricchio et al. 2013 in the explicit form of
-        docs/theory.md): the resultants ``n, m`` are splines of the same degree whose
-        control values interpolate the pointwise constitutive values at the collocation
-        points (one back-substitution through the factored ``M_c``); the balance laws use
-        their spline derivatives ``N1 n_hat, N1 m_hat``. Neumann ends keep the enhanced
-        collocation rows. ``K_s`` is then carried but never read.
     """
 
     state_cls = BeamState
@@ -152,7 +146,6 @@ class BeamProblem(BeamBase):
         if formulation not in FORMULATIONS:
             raise ValueError(f"formulation: expected one of {', '.join(FORMULATIONS)}, got {formulation!r}")
         self.formulation = formulation
-        self.mixed = formulation == "mixed"
         self._setup(space, constants, bcs, loads, initial, backend, kelvin_voigt)
         n = space.n_ctrl
         self.n = n
@@ -284,10 +277,7 @@ class BeamProblem(BeamBase):
             return self._nb.action(u, y, BeamState)
         th = u[1]
         th_c, th_s = self.N0 @ th, self.N1 @ th
-        if self.mixed:  # K_s is not read by the mixed balance laws: carried unchanged
-            K, K_s = y.K + rot_T(y.R, jr_times(th_c, th_s)), y.K_s.copy()
-        else:
-            K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, self.N2 @ th)
+        K, K_s = curvature_update(y.R, y.K, y.K_s, th_c, th_s, self.N2 @ th)
         return BeamState(y.c + u[0], y.v + u[2], y.w + u[3], exp_so3(th_c) @ y.R, K, K_s)
 
     def dexpinv(self, u: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -320,29 +310,14 @@ class BeamProblem(BeamBase):
         R, K = y.R, y.K
         w_c = self.N0 @ y.w
         c_s = self.N1 @ y.c
-        if self.mixed:
-            Rt_cs = rot_T(R, c_s)
-            gam = Rt_cs - self.gamma0
-            KM = K - self.K0 if self.curved else K
-            if self.tau > 0.0:
-                gd, kd = strain_rates(R, c_s, self.N1 @ y.v, w_c, self.N1 @ y.w)
-                gam, KM = gam + self.tau * gd, KM + self.tau * kd
-            N, M = self.CN * gam, self.CM * KM
-            # resultant splines through the pointwise constitutive values, then their
-            # s-derivatives at the collocation points (spatial frame)
-            nm_hat = self.space.solve(np.concatenate([rot(R, N), rot(R, M)], axis=1))
-            nm_s = self.N1 @ nm_hat
-            n_s = nm_s[:, :3]
-            tq = rot_T(R, nm_s[:, 3:])
-        else:
-            c_ss = self.N2 @ y.c
-            Rt_cs, gam, gam_s = strains(R, c_s, c_ss, K, self.gamma0)
-            KM, KM_s = (K - self.K0, y.K_s - self.K0_s) if self.curved else (K, y.K_s)
-            if self.tau > 0.0:  # Kelvin-Voigt: strains + tau * their material rates
-                gam, gam_s, KM, KM_s = self._add_strain_rates(y, R, K, c_s, c_ss, w_c, gam, gam_s, KM, KM_s)
-            N, M = self.CN * gam, self.CM * KM
-            n_s = rot(R, cross(K, N) + self.CN * gam_s)
-            tq = cross(K, M) + self.CM * KM_s
+        c_ss = self.N2 @ y.c
+        Rt_cs, gam, gam_s = strains(R, c_s, c_ss, K, self.gamma0)
+        KM, KM_s = (K - self.K0, y.K_s - self.K0_s) if self.curved else (K, y.K_s)
+        if self.tau > 0.0:  # Kelvin-Voigt: strains + tau * their material rates
+            gam, gam_s, KM, KM_s = self._add_strain_rates(y, R, K, c_s, c_ss, w_c, gam, gam_s, KM, KM_s)
+        N, M = self.CN * gam, self.CM * KM
+        n_s = rot(R, cross(K, N) + self.CN * gam_s)
+        tq = cross(K, M) + self.CM * KM_s
         Om = rot_T(R, w_c)
         tq = tq - cross(Om, self.Jm * Om) + cross(Rt_cs, N)
         f = self.loads.distributed_profile(t) if (self.has_q or self.has_m) else 0.0

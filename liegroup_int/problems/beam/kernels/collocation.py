@@ -4,10 +4,10 @@ built from :mod:`.physics`.
 Same mathematics as the NumPy path of :mod:`..problem`, one loop over the collocation
 points per call:
 
-* :func:`action_primal` (:func:`action_mixed`): ``theta, theta_s (, theta_ss)`` at the
-  points, ``R <- exp(hat(theta)) R``, ``K <- K + R^T J_r(theta) theta_s`` and (primal) its
-  s-derivative; ``c, v, w`` plus their increments.
-* :func:`rates_primal` (:func:`rates_mixed`): strains (plus ``tau`` times their rates
+* :func:`action_primal`: ``theta, theta_s, theta_ss`` at the points, ``R <- exp(hat(theta))
+  R``, ``K <- K + R^T J_r(theta) theta_s`` and its s-derivative; ``c, v, w`` plus their
+  increments.
+* :func:`rates_primal`: strains (plus ``tau`` times their rates
   with Kelvin-Voigt damping), resultants, balance laws, enhanced collocation at Neumann
   ends, ``dexpinv``, prescribed rows, all into the ``(n, 12)`` right-hand side whose
   forward sweep runs in the same loop, then the ``M_c`` solve into the ``(4, n, 3)``
@@ -28,7 +28,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ....groups.kernels_numba import coef_ABC, coef_ABCB1C1, coef_D
+from ....groups.kernels_numba import coef_ABCB1C1, coef_D
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
 from .adapters import c64, f1, f2, f3, fs, i1, is_
@@ -107,7 +107,6 @@ class CollocationData(NamedTuple):
     fixp: np.ndarray  # (n,) rows with prescribed zero position and velocity rates
     fixr: np.ndarray  # (n,) and rotation and angular velocity rates
     rhs: np.ndarray  # (n, 12) work: right-hand sides
-    nm: np.ndarray  # (n, 6) work (mixed): spatial resultants, then their control values
     Gt: np.ndarray  # (n, 3) work: R^T c_s, N, M per point
     N: np.ndarray
     M: np.ndarray
@@ -126,7 +125,7 @@ def unpack(flat, head):
         f1(flat, head, 23), f1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27),
         i1(flat, head, 28), i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), f1(flat, head, 32),
         i1(flat, head, 33), i1(flat, head, 34), i1(flat, head, 35), f2(flat, head, 36), f2(flat, head, 37),
-        f2(flat, head, 38), f2(flat, head, 39), f2(flat, head, 40), f2(flat, head, 41))
+        f2(flat, head, 38), f2(flat, head, 39), f2(flat, head, 40))
 
 
 # ====================================================================== action
@@ -163,20 +162,6 @@ def action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, d):
         k = row(K, i)
         put(K2, i, add(k, x))
         put(Ks2, i, add(sub(row(Ks, i), cross(k, x)), rot_T(R, i, jr_times_s(cB, cC, cB1, cC1, th, ts, tss))))
-
-
-@njit(cache=True, fastmath=FM, _nrt=False)
-def action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, d):
-    """The action without the curvature derivative (the mixed balance laws do not read
-    ``K_s``, carried unchanged)."""
-    _translate(u, c, v, w, c2, v2, w2)
-    u1 = u[1]
-    for i in range(c.shape[0]):
-        th, ts = window2(d.band, 0, 1, i, d.j0, u1, 0)
-        cA, cB, cC = coef_ABC(norm(th), d.ser, d.thr)
-        _rotate_left(R, R2, i, exp_rows(cA, cB, th))
-        put(K2, i, add(row(K, i), rot_T(R, i, jr_times(cB, cC, th, ts))))
-        put(Ks2, i, row(Ks, i))
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
@@ -304,57 +289,6 @@ def rates_primal(c, v, w, R, K, Ks, u, out, d):
 
 
 @njit(cache=True, fastmath=FM, inline="always")
-def _mixed_point(d, i, c, v, w, R, K):
-    """Pass 1 of the mixed rates at point ``i``: ``R^T c_s``, ``N``, ``M`` and the spatial
-    resultants into the work arrays; returns the dissipation."""
-    B, j0 = d.band, d.j0
-    CN, CM = row(d.CN, i), row(d.CM, i)
-    Gt = rot_T(R, i, window(B, 1, i, j0, c, 0))
-    gam, km = strain(Gt, row(d.gamma0, i)), strain(row(K, i), row(d.K0, i))
-    gd = kd = (0.0, 0.0, 0.0)
-    power = 0.0
-    if d.tau != 0.0:
-        Omega = rot_T(R, i, window(B, 0, i, j0, w, 0))
-        gd = gamma_rate(rot_T(R, i, window(B, 1, i, j0, v, 0)), Omega, Gt)
-        kd = rot_T(R, i, window(B, 1, i, j0, w, 0))
-        if d.power:
-            power -= d.quad[i] * (dissipation(d.tau, CN, gd) + dissipation(d.tau, CM, kd))
-    N, M = resultant(CN, gam, d.tau, gd), resultant(CM, km, d.tau, kd)
-    put(d.Gt, i, Gt)
-    put(d.N, i, N)
-    put(d.M, i, M)
-    put_at(d.nm, i, 0, rot(R, i, N))
-    put_at(d.nm, i, 3, rot(R, i, M))
-    return power
-
-
-@njit(cache=True, fastmath=FM, _nrt=False)
-def rates_mixed(c, v, w, R, K, Ks, u, out, d):
-    """Stage rate of the mixed formulation: pass 1 interpolates the pointwise resultants
-    by splines (one ``M_c`` solve, its forward sweep fused), pass 2 takes their
-    s-derivatives ``N1 n_hat, N1 m_hat`` in the balance laws."""
-    n, B, j0 = c.shape[0], d.band, d.j0
-    banded = d.minv.shape[0] == 0
-    fused = banded and d.joint_a.shape[0] == 0
-    power = 0.0
-    for i in range(n):
-        power += _mixed_point(d, i, c, v, w, R, K)
-        if banded:
-            forward_row(d.nm, i, d.lu, d.lower, 0, 6)
-    solve_cols(d.nm, d.lu, d.lower, d.upper, d.minv, True, 0, 6, d.tmp)
-    u1 = u[1]
-    for i in range(n):
-        vc, wc, th = window(B, 0, i, j0, v, 0), window(B, 0, i, j0, w, 0), window(B, 0, i, j0, u1, 0)
-        ns, ms = window(B, 1, i, j0, d.nm, 0), window(B, 1, i, j0, d.nm, 3)
-        N, M, Omega = row(d.N, i), row(d.M, i), rot_T(R, i, wc)
-        tq = add(sub(rot_T(R, i, ms), gyroscopic(Omega, row(d.J, i))), cross(row(d.Gt, i), N))
-        power += _balance_row(d, i, R, N, M, ns, tq, vc, wc, th)
-        if fused:
-            forward_row(d.rhs, i, d.lu, d.lower, 0, 12)
-    return power + _finish(d, v, w, R, out, fused)
-
-
-@njit(cache=True, fastmath=FM, inline="always")
 def _finish(d, v, w, R, out, forward_done):
     """Joint rows, then the ``M_c`` solve of the right-hand sides into ``out``; returns
     the power of the joint loads."""
@@ -423,18 +357,8 @@ def call_action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head
 
 
 @njit(cache=True, _nrt=False)
-def call_action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, flat, head):
-    action_mixed(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, unpack(flat, head))
-
-
-@njit(cache=True, _nrt=False)
 def call_rates_primal(c, v, w, R, K, Ks, u, out, flat, head):
     return rates_primal(c, v, w, R, K, Ks, u, out, unpack(flat, head))
-
-
-@njit(cache=True, _nrt=False)
-def call_rates_mixed(c, v, w, R, K, Ks, u, out, flat, head):
-    return rates_mixed(c, v, w, R, K, Ks, u, out, unpack(flat, head))
 
 
 @njit(cache=True, _nrt=False)
@@ -452,19 +376,8 @@ def engine_rate(data, t, y, u, out):
 
 
 @njit(cache=True, inline="always")
-def engine_rate_mixed(data, t, y, u, out):
-    set_loads(data[0].loads, data[1], data[2], data[3], t)
-    return rates_mixed(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0])
-
-
-@njit(cache=True, inline="always")
 def engine_action(data, u, y0, y1):
     action_primal(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
-
-
-@njit(cache=True, inline="always")
-def engine_action_mixed(data, u, y0, y1):
-    action_mixed(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
 
 
 @njit(cache=True, inline="always")
@@ -472,9 +385,8 @@ def engine_angle(data, u):
     return rotation_angle(u, data[0])
 
 
-#: The engine's kernels, one set per formulation (a run compiles its own formulation only).
+#: The engine's kernels of the collocation beam.
 ENGINE_KERNELS = ad.engine_kernels("beam", engine_rate, engine_action, engine_angle, 6)
-ENGINE_KERNELS_MIXED = ad.engine_kernels("beam_mixed", engine_rate_mixed, engine_action_mixed, engine_angle, 6)
 STATE_FIELDS = ("c", "v", "w", "R", "K", "K_s")
 
 
@@ -550,7 +462,7 @@ def collocation_data(pb, solver: str = "auto"):
         c64(pb.K0) if pb.curved else zeros, c64(pb.K0_s) if pb.curved else zeros, *map(c64, per_point),
         np.broadcast_to(np.ravel(np.asarray(pb.mu, dtype=float)), (n,)).copy(), c64(pb.quad), float(pb.tau),
         bool(pb.has_quadrature), bool(pb.has_q), bool(pb.has_m), loads, **ends, **joints,
-        fixp=fixp.astype(np.int64), fixr=fixr.astype(np.int64), rhs=np.zeros((n, 12)), nm=np.zeros((n, 6)),
+        fixp=fixp.astype(np.int64), fixr=fixr.astype(np.int64), rhs=np.zeros((n, 12)),
         Gt=zeros, N=zeros, M=zeros, tmp=np.zeros((n if name == "dense" else 0, 12)))
     return data, table, name
 
@@ -578,13 +490,10 @@ class NumbaBeamKernels(ad.KernelSet):
 
     def __init__(self, pb, solver: str = "auto"):
         data, table, self.solver = collocation_data(pb, solver)
-        self.mixed = bool(pb.mixed)
         self.bandwidth = data.band.shape[2]
         super().__init__(data, table, pb.n)
 
     def kernels(self) -> tuple:
-        if self.mixed:
-            return call_action_mixed, call_rates_mixed, call_angle, ENGINE_KERNELS_MIXED
         return call_action_primal, call_rates_primal, call_angle, ENGINE_KERNELS
 
     def solve(self, x):
