@@ -155,22 +155,26 @@ def rotation_angle(u, d):
 
 # ====================================================================== stage rates
 @njit(cache=True, fastmath=FM, inline="always")
-def _point_forces(d, i, c, v, w, R, K, u1):
-    """The weak-form terms of point ``i``: the weighted ``dexpinv_{-Theta} Omega``, torque
-    ``p``, moment ``M`` and spatial force ``n``, and the power at the point."""
+def _point_forces(d, i, c, v, w, R, K, u1, kin):
+    """The weak-form terms of point ``i``: the weighted ``dexpinv_{-Theta} Omega`` (zero
+    without ``kin``), torque ``p``, moment ``M`` and spatial force ``n``, and the power at
+    the point."""
     wfi, wai, tau, B, j0 = d.wf[i], d.wa[i], d.tau, d.band, d.j0
     zero = (0.0, 0.0, 0.0)
     th = Om = cs = Oms = vs = dth = p = Mw = nw = zero
     power = 0.0
     if wfi != 0.0 or tau > 0.0:
-        th, Om = window(B, 0, i, j0, u1, 0), window(B, 0, i, j0, w, 0)
+        Om = window(B, 0, i, j0, w, 0)
+        if kin:
+            th = window(B, 0, i, j0, u1, 0)
     if wai != 0.0 or tau > 0.0:
         cs = window(B, 1, i, j0, c, 0)
     if tau > 0.0:
         Oms, vs = window(B, 1, i, j0, w, 0), window(B, 1, i, j0, v, 0)
     if wfi != 0.0:
         k = row(K, i)
-        dth = scale(wfi, dexpinv(coef_D(norm(th), d.ser, d.thr), neg(th), Om))
+        if kin:
+            dth = scale(wfi, dexpinv(coef_D(norm(th), d.ser, d.thr), neg(th), Om))
         kd = curvature_rate(Oms, k, Om) if tau > 0.0 else zero
         M = resultant(row(d.CM, i), strain(k, row(d.K0, i)), tau, kd)
         p = scale(-wfi, add(cross(M, k), gyroscopic(Om, row(d.J, i))))
@@ -404,10 +408,11 @@ def _support_power(d, v, w, out):
 
 
 @njit(cache=True, fastmath=FM, _nrt=False)
-def rates(c, v, w, R, K, u, out, d):
+def rates(c, v, w, R, K, u, out, d, kin):
     """Stage rate ``(4, n, 3)`` into ``out`` (the loads at the stage time already in the
     data); returns the power of the loads and supports minus the dissipation when the
-    problem computes it, else 0."""
+    problem computes it, else 0. Without ``kin`` the rotational increment's rate ``out[1]``
+    is not formed (the leapfrog's kicks read the accelerations ``out[2], out[3]`` only)."""
     B, j0, u1 = d.band, d.j0, u[1]
     for j in range(v.shape[0]):
         for q in range(3):
@@ -417,12 +422,13 @@ def rates(c, v, w, R, K, u, out, d):
     for i in range(R.shape[0]):
         if d.wf[i] == 0.0 and d.wa[i] == 0.0:
             continue
-        dth, p, Mw, nw, pi = _point_forces(d, i, c, v, w, R, K, u1)
+        dth, p, Mw, nw, pi = _point_forces(d, i, c, v, w, R, K, u1, kin)
         power += pi
         js = j0[i]
         for k in range(B.shape[2]):
             j, b0, b1 = js + k, B[0, i, k], B[1, i, k]
-            put(o1, j, axpy(b0, dth, row(o1, j)))
+            if kin:
+                put(o1, j, axpy(b0, dth, row(o1, j)))
             put(o2, j, axpy(-b1, nw, row(o2, j)))
             put(o3, j, add(row(o3, j), sub(scale(b0, p), scale(b1, Mw))))
     power += _point_loads(d, v, w, R, out)
@@ -446,7 +452,7 @@ def call_action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
 
 @njit(cache=True, _nrt=False)
 def call_rates(c, v, w, R, K, u, out, flat, head):
-    return rates(c, v, w, R, K, u, out, unpack(flat, head))
+    return rates(c, v, w, R, K, u, out, unpack(flat, head), True)
 
 
 @njit(cache=True, _nrt=False)
@@ -458,7 +464,7 @@ def call_angle(u, flat, head):
 @njit(cache=True, inline="always")
 def engine_rate(data, t, y, u, out):
     set_loads(data[0].loads, data[1], data[2], data[3], t)
-    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0])
+    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0], True)
 
 
 @njit(cache=True, inline="always")
@@ -472,6 +478,14 @@ def engine_angle(data, u):
 
 
 ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, engine_angle, 5)
+
+
+@njit(cache=True, inline="always")
+def _accelerations(data, t, y, zero, out):
+    """The accelerations ``out[2], out[3]`` at ``(t, y)`` (a zero increment, without the
+    rotational increment's rate); returns the power as :func:`rates`."""
+    set_loads(data[0].loads, data[1], data[2], data[3], t)
+    return rates(y[0], y[1], y[2], y[3], y[4], zero, out, data[0], False)
 
 
 # ====================================================================== splitting
@@ -519,7 +533,7 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
     m = y[1].shape[0]
     a, b = y, y2
     d = data[0]
-    engine_rate(data, t, a, zero, acc)
+    _accelerations(data, t, a, zero, acc)
     p0 = _synchronized_power(d, a, acc, scratch) if d.power else 0.0
     evals, odd = 1, False
     for _ in range(n):
@@ -532,7 +546,7 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
             engine_action(data, u, a, b)
             a, b, odd = b, a, not odd
             t += hg
-            engine_rate(data, t, a, zero, acc)
+            _accelerations(data, t, a, zero, acc)
             evals += 1
             _kick(a, acc, 0.5 * hg)
             if d.power:
