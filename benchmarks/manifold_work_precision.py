@@ -17,7 +17,7 @@ Four problems, each against a tight reference at the final time T:
    energy drift. RKMK4 runs in the compiled engine (the plugin's kernels); CF4 and CG4a in
    the generic loop. DOP853 integrates ``R' = R hat(W)`` and ``W'`` on the flattened
    ``(R, W)``; ``R`` is projected onto SO(3) (polar factor) at the end.
-4. **Double 3D pendulum** on (TS^2)^2 (``examples/n_pendulum.py``), T = 2: error on the
+4. **Double 3D pendulum** on (TS^2)^2 (:class:`liegroup_int.problems.NPendulum`), T = 2: error on the
    flat state, invariant the energy drift. DOP853 integrates ``q' = w x q``, ``w' = ...``
    in R^12 with the same accelerations, projected onto (TS^2)^2 at the end.
 
@@ -41,6 +41,7 @@ from scipy.integrate import solve_ivp
 from liegroup_int import Isospectral, Sphere, integrate
 from liegroup_int.bench.table import figure_dir, markdown, parser
 from liegroup_int.bench.timing import best_of
+from liegroup_int.problems import NPendulum
 
 QUICK = dict(cases=["llg"], steps=2, tols=(1e-4, 1e-7, 1e-10), repeats=1, compiled=False)
 FULL = dict(steps=None, tols=(1e-4, 1e-6, 1e-8, 1e-10, 1e-12), repeats=3, compiled=True)
@@ -138,13 +139,8 @@ def heavy_top_case():
 
 
 def pendulum_case():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("n_pendulum", Path(__file__).resolve().parents[1] / "examples"
-                                                  / "n_pendulum.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    space, gen, y0, energy = mod.n_pendulum(2)
+    pend = NPendulum(2)
+    space, gen, y0, energy = pend.space, pend.generator, pend.initial_state(), pend.energy
 
     def rhs(t, y):
         xi = gen(t, y).reshape(2, 6)  # (rho_j, theta_j) = (q_j x w'_j, w_j): w'_j = rho_j x q_j

@@ -12,7 +12,7 @@ Their set-up (the authors' MATLAB code, github.com/davidemurari/NFold3dPendulumL
 ``tol = 1e-6`` and ``h <- 0.85 (tol / err)^(1/4) h``, from ``h0 = T / 100``; accuracy
 ``|z_ref - z(T)|_2`` against ode45 at AbsTol 1e-12, RelTol 1e-6.
 
-Ours: ``examples/n_pendulum.py`` with those masses, lengths and start, ``integrate(...,
+Ours: :class:`liegroup_int.problems.NPendulum` with those masses, lengths and start, ``integrate(...,
 method="rkmk45", rtol=1e-10, atol=1e-6)`` (our RKMK45 pair and PI controller, error
 against ``atol``), accuracy ``|z_ref - z(T)|_2`` against our own RKMK45 at
 ``rtol = atol = 1e-12``. Also the energy drift.
@@ -25,32 +25,22 @@ available here): accepted steps and accuracy at T = 3 of their RKMK(5,4).
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
 from liegroup_int import integrate
 from liegroup_int.bench.table import markdown, parser
 from liegroup_int.bench.timing import cpu
+from liegroup_int.problems import NPendulum
 
 #: N -> (accepted steps, accuracy at T = 3) of their RKMK(5,4), tol = 1e-6
 PUBLISHED = {2: (52, 8.0e-6), 4: (114, 8.2e-6), 6: (181, 2.3e-5), 8: (248, 3.1e-5), 10: (316, 4.8e-5),
              12: (385, 3.6e-5), 14: (446, 3.8e-5), 16: (508, 3.9e-5), 18: (594, 5.9e-5), 20: (675, 5.7e-5)}
 
 
-def _example():
-    spec = importlib.util.spec_from_file_location("n_pendulum", Path(__file__).resolve().parents[1] / "examples"
-                                                  / "n_pendulum.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def case(n: int):
-    space, gen, _, energy = _example().n_pendulum(n, masses=np.ones(n), lengths=np.full(n, 5.0 / n))
+    pend = NPendulum(n, masses=np.ones(n), lengths=np.full(n, 5.0 / n))
     y0 = np.tile(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), n)
-    return space, gen, y0, energy
+    return pend.space, pend.generator, y0, pend.energy
 
 
 def row(n: int, tol: float, t_end: float) -> list:

@@ -49,7 +49,7 @@ def page():
 
 def test_every_code_block_is_python_or_declared_text():
     langs = [lang for lang, _ in _blocks(PAGE.read_text())]
-    assert langs.count("python") == 6, langs
+    assert langs.count("python") == 7, langs
     assert set(langs) <= {"python", "text", "toml"}, langs
 
 
@@ -57,8 +57,9 @@ def test_printed_output_is_what_the_page_says(page):
     _, printed = page
     # the page's comments: "[1.5]" (SO2 angle), "1 2.741068 29 True" (the free body's
     # terminal flip event on the dense output), "7.0e-06" (the heavy top's energy error over
-    # 1000 s with yoshida4) and "True" (SE3 screw motion)
-    assert printed == ["", "[1.5]\n", "", "1 2.741068 29 True\n", "7.0e-06\n", "True\n"]
+    # 1000 s with yoshida4), "5.0e-03" (the double pendulum's over 500 s with RATTLE's
+    # yoshida4) and "True" (SE3 screw motion)
+    assert printed == ["", "[1.5]\n", "", "1 2.741068 29 True\n", "7.0e-06\n", "5.0e-03\n", "True\n"]
 
 
 def test_so2_derived_api(page):
@@ -98,7 +99,7 @@ def test_so2_integration_is_exact_for_a_linear_rate(page):
 def test_se3_screw_motion_is_exact(page):
     """Constant body twist: every stage increment is a multiple of the twist, where RKMK is
     exact, so the end pose equals exp(twist) to round-off (the page prints np.allclose)."""
-    ns = page[0][5]
+    ns = page[0][6]
     err = np.max(np.abs(ns["sol"].y_final - ns["SE3"].exp(ns["twist"])))
     assert err < 1e-12
 
@@ -111,6 +112,18 @@ def test_splitting_keeps_the_heavy_top_energy_bounded(page):
     e = ns["energy"] - ns["energy"][0]
     drift = abs(np.polyfit(ns["sol"].t, e, 1)[0] * 1000.0)
     assert drift < 0.1 * np.max(np.abs(e)) and np.max(np.abs(e)) < 1e-5
+
+
+def test_n_pendulum_rattle_keeps_its_energy_and_constraints(page):
+    """The page's double pendulum over 500 s with yoshida4 (RATTLE): the energy error has no
+    trend (a linear fit changes it by 0.4 % of its largest value; 10 % allowed) and the links
+    stay unit vectors perpendicular to their angular velocities to round-off."""
+    ns = page[0][5]
+    pend, sol = ns["pend"], ns["sol"]
+    e = np.array([pend.energy(y) for y in sol.y]) - pend.energy(sol.y[0])
+    drift = abs(np.polyfit(sol.t, e, 1)[0] * 500.0)
+    assert drift < 0.1 * np.max(np.abs(e)) and np.max(np.abs(e)) < 0.01
+    assert max(pend.space.constraint(y) for y in sol.y) < 1e-14
 
 
 def test_flip_event_matches_scipy(page):
