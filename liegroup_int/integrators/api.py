@@ -82,9 +82,10 @@ def integrate(
         first, or at the ``terminal``-th, occurrence) and ``direction`` (``+1``: rising
         zeros only, ``-1``: falling, ``0``: both). Zeros are located on the dense output by
         Brent's method to ``4 eps`` (:mod:`liegroup_int.integrators.events`) and returned in
-        ``Solution.t_events`` / ``Solution.y_events``. With the compiled engine, the steps
-        run compiled and each is handed to Python for its interpolant and the events (a
-        Python ``g`` is called per step).
+        ``Solution.t_events`` / ``Solution.y_events``. With the compiled engine the steps run
+        compiled: a ``numba.njit`` ``g`` is evaluated in the compiled loop after every step,
+        which hands back to Python only the steps over which an event changes sign; a
+        Python ``g`` gets every step.
     dense_order : int, optional
         Order ``q`` of the continuous extension (local error ``O(h^(q+1))``), in
         ``[1, p]``. Default: ``p`` for the embedded pairs (rkmk32, rkmk45, rkmk65: values

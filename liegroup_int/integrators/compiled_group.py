@@ -132,9 +132,11 @@ def unit_scale(data, y, out):
 
 
 # ---------------------------------------------------------------- a user's njit f
-#: Where the data of a user's field hold the point shape it sees (``data[SHAPE]``) and the
-#: function itself (``data[FIELD]``, a first-class function value of :func:`field_type`).
-SHAPE, FIELD = 5, 6
+#: Where the data of a user's field hold the point shape it sees (``data[SHAPE]``), the
+#: function itself (``data[FIELD]``, a first-class function value of :func:`field_type`),
+#: the event functions (``data[EVENTS]``, a tuple of first-class values of :func:`event_type`)
+#: and their state (``data[EVSTATE]``, ``(3, k)``: last value, direction, watched or not).
+SHAPE, FIELD, EVENTS, EVSTATE = 5, 6, 7, 8
 
 
 def field_type(point_ndim: int):
@@ -143,6 +145,14 @@ def field_type(point_ndim: int):
     from numba.core import types as nt
 
     return nt.FunctionType(nt.Array(nt.float64, 1, "C")(nt.float64, nt.Array(nt.float64, point_ndim, "C")))
+
+
+def event_type(point_ndim: int):
+    """The first-class function type of an event ``g(t: float64, y) -> float64`` on points
+    of ``point_ndim`` dimensions."""
+    from numba.core import types as nt
+
+    return nt.FunctionType(nt.float64(nt.float64, nt.Array(nt.float64, point_ndim, "C")))
 
 
 _DIM_ERROR = "f(t, y) must return a float array of shape (space.dim,)"
@@ -174,6 +184,50 @@ def field_function(f, point_ndim: int):
     return adapted
 
 
+def event_function(g, point_ndim: int):
+    """``g`` as the engine calls it: ``g`` itself when it returns a float64, else an adapter
+    converting its scalar result (a result that is not a number is refused in one line)."""
+    from numba.core import types as nt
+
+    args = tuple(event_type(point_ndim).signature.args)
+    g.compile(args)
+    res = g.overloads[args].signature.return_type
+    if res == nt.float64:
+        return g
+    if not isinstance(res, (nt.Float, nt.Integer, nt.Boolean)):
+        raise ValueError(f"event g(t, y) must return a number, got {res}")
+
+    @njit(cache=False)
+    def adapted(t, y):
+        return float(g(t, y))
+
+    return adapted
+
+
+@njit(cache=True)
+def no_event(t, y):
+    """The event slot of a run without compiled events (never evaluated)."""
+    return 1.0
+
+
+@njit(cache=True)
+def user_watch(data, t, y):
+    """After an accepted step: each watched event ``g`` at ``(t, y)``; ``True`` if one crossed
+    zero since the last step in its direction (scipy's rule, as
+    :func:`~.events.triggered`). The values are kept for the next step."""
+    gs, st = data[EVENTS], data[EVSTATE]
+    hit = False
+    for i in range(st.shape[1]):
+        if st[2, i] == 0.0:
+            continue
+        g, old, d = gs[i](t, y.reshape(data[SHAPE])), st[0, i], st[1, i]
+        up, down = old <= 0.0 <= g, old >= 0.0 >= g
+        if (up and d > 0) or (down and d < 0) or ((up or down) and d == 0):
+            hit = True
+        st[0, i] = g
+    return hit
+
+
 @njit(cache=True)
 def user_field(data, t, y, out):
     """``out = f(t, y)`` with the point reshaped to the group's point shape."""
@@ -196,18 +250,40 @@ def _user_rate(data, t, y, u, out):
 def user_problem(kernels: EngineKernels, data: tuple, problem, dim: int, extra: tuple = ()) -> CompiledProblem:
     """The engine's view of a user's compiled ``f`` on one point of ``problem.space``: the
     kernels' ``data`` (:data:`SHAPE` entries), the point shape, ``f`` as a first-class
-    function value, then ``extra``."""
+    function value, the event slots (none watched), then ``extra``."""
+    from numba.core import types as nt
+
     shape = tuple(int(k) for k in problem.space.point_shape)
-    data = data + (shape, field_function(problem.f, len(shape))) + tuple(extra)
-    return CompiledProblem(kernels, data, lambda n: dim,
-                           single_point_pack(shape), lambda flat: flat.reshape(shape),
-                           functions=((FIELD, field_type(len(shape))),))
+    data = data + (shape, field_function(problem.f, len(shape)), (no_event,), np.zeros((3, 1))) + tuple(extra)
+    functions = ((FIELD, field_type(len(shape))), (EVENTS, nt.UniTuple(event_type(len(shape)), 1)))
+    return CompiledProblem(kernels, data, lambda n: dim, single_point_pack(shape), lambda flat: flat.reshape(shape),
+                           functions=functions, with_events=_with_events)
+
+
+def _with_events(cp: CompiledProblem, specs, t0: float, y0) -> CompiledProblem | None:
+    """``cp`` watching the events ``specs`` (:class:`~.events.EventSpec`) from ``(t0, y0)``,
+    or ``None`` when one of them is not numba-compiled (the drivers then hand every step
+    to Python)."""
+    import dataclasses
+
+    from numba.core import types as nt
+
+    if not specs or not all(is_compiled_function(s.fn) for s in specs):
+        return None
+    ndim = len(cp.data[SHAPE])
+    gs = tuple(event_function(s.fn, ndim) for s in specs)
+    state = np.array([[float(s.fn(t0, y0)) for s in specs], [s.direction for s in specs], [1.0] * len(specs)])
+    data = cp.data[:EVENTS] + (gs, state) + cp.data[EVSTATE + 1:]
+    functions = dict(cp.functions)
+    functions[EVENTS] = nt.UniTuple(event_type(ndim), len(gs))
+    return dataclasses.replace(cp, data=data, functions=tuple(functions.items()))
 
 
 def _user_kernels(name: str, action, scale) -> EngineKernels:
     """Engine kernels calling a user's ``f`` from the data with ``action`` and ``scale``: one
     set per kind of space, whatever the function (cached on disk)."""
-    return EngineKernels(name, _user_rate, action, group_angle, scale, field=user_field, dexpinv=group_dexpinv)
+    return EngineKernels(name, _user_rate, action, group_angle, scale, field=user_field, dexpinv=group_dexpinv,
+                         watch=user_watch)
 
 
 USER_KERNELS = _user_kernels("user", group_action, group_scale)

@@ -18,10 +18,10 @@ the sphere (:mod:`.compiled_group`). The mathematics is that of ``SOn``:
 The kernels write into the data's work arrays (plain loops: the matrices are small), so a
 stage allocates nothing (the once-per-step angle check's eigenvalue call does).
 
-Data ``(ii, jj, coef, n, dim, point_shape, f, A, T, S, E, W)``: the basis indices
+Data ``(ii, jj, coef, n, dim, point_shape, f, events, event_state, A, T, S, E, W)``: the basis indices
 (``hat(xi)[jj, ii] = xi``, ``hat(xi)[ii, jj] = -xi``), the series coefficients, sizes, the
 point shape (what the user's ``f`` sees), ``f`` itself (a first-class function value,
-:func:`~.compiled_group.user_problem`) and ``n x n`` work arrays.
+:func:`~.compiled_group.user_problem`), the event slots and ``n x n`` work arrays.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .compiled_group import unit_scale, user_field, user_problem
+from .compiled_group import unit_scale, user_field, user_problem, user_watch
 from .engine import CompiledProblem, EngineKernels
 
 #: Terms of the dexpinv series without a truncation order (the base class's 40).
@@ -107,8 +107,8 @@ def son_exp(A, E, W):
 @njit(cache=True)
 def son_dexpinv(data, u, w, out):
     """``out = dexpinv_u(w)`` (``w`` may be ``out``)."""
-    ii, jj, coef, A, T, S = data[0], data[1], data[2], data[7], data[8], data[9]
-    W = data[11]
+    ii, jj, coef, A, T, S = data[0], data[1], data[2], data[9], data[10], data[11]
+    W = data[13]
     n = A.shape[0]
     _hat(u, ii, jj, A)
     _hat(w, ii, jj, T)
@@ -134,7 +134,7 @@ def son_dexpinv(data, u, w, out):
 @njit(cache=True)
 def son_angle(data, u):
     """Spectral norm of ``hat(u)``: the largest rotation angle of ``exp(u)``."""
-    ii, jj, A, T = data[0], data[1], data[7], data[8]
+    ii, jj, A, T = data[0], data[1], data[9], data[10]
     _hat(u, ii, jj, A)
     n = A.shape[0]
     for i in range(n):  # T = A^T A
@@ -150,7 +150,7 @@ def son_angle(data, u):
 @njit(cache=True)
 def stiefel_action(data, u, y, out):
     """``out = exp(u) Y`` (Stiefel: ``Y`` of shape ``(n, k)``)."""
-    ii, jj, n, A, E, W = data[0], data[1], data[3], data[7], data[10], data[11]
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[9], data[12], data[13]
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
     k = y.shape[0] // n
@@ -165,7 +165,7 @@ def stiefel_action(data, u, y, out):
 @njit(cache=True)
 def isospectral_action(data, u, y, out):
     """``out = Q L Q^T`` with ``Q = exp(u)`` (Isospectral: ``L`` of shape ``(n, n)``)."""
-    ii, jj, n, A, E, W = data[0], data[1], data[3], data[7], data[10], data[11]
+    ii, jj, n, A, E, W = data[0], data[1], data[3], data[9], data[12], data[13]
     _hat(u, ii, jj, A)
     son_exp(A, E, W)
     for i in range(n):  # W = E L
@@ -191,7 +191,8 @@ def _user_rate_son(data, t, y, u, out):
 
 
 def _son_kernels(name: str, action) -> EngineKernels:
-    return EngineKernels(name, _user_rate_son, action, son_angle, unit_scale, field=user_field, dexpinv=son_dexpinv)
+    return EngineKernels(name, _user_rate_son, action, son_angle, unit_scale, field=user_field, dexpinv=son_dexpinv,
+                         watch=user_watch)
 
 
 STIEFEL_KERNELS = _son_kernels("user_stiefel", stiefel_action)

@@ -103,6 +103,13 @@ def _next_stop(on_step, t: float) -> float:
     return t if nxt is None else float(nxt(t))
 
 
+def _attach(stepper, on_step) -> None:
+    """Let ``on_step`` hand its events to the compiled ``stepper`` (``on_step.attach``)."""
+    attach = getattr(on_step, "attach", None)
+    if stepper is not None and attach is not None:
+        attach(stepper)
+
+
 def _hand_over(problem: Problem, on_step, res):
     """``on_step`` of the last step of a compiled call; its ``(t, y)`` to stop at, or ``None``."""
     last = res.last
@@ -170,6 +177,7 @@ def integrate_fixed(
     stepper = stepper_for(problem, tab, monitor) if not cf else None
     steps = _GenericSteps(problem, tab, y0, stats, monitor, on_step) if stepper is None else None
     memory = stepper.memory(y0) if stepper is not None else None
+    _attach(stepper, on_step)
     t, y = t0, y0
     if observer is not None:
         observer(t, y)
@@ -339,6 +347,7 @@ def integrate_adaptive(
                        _initial_control(problem, tab, (t0, t_end), y0, rtol, atol, h0, h_max, controller, stats),
                        stepper.memory(y0) if stepper is not None else None)
     stats.controller = run.ctl.memory()
+    _attach(stepper, on_step)
     t, y = t0, y0
     if observer is not None:
         observer(t, y)

@@ -75,6 +75,12 @@ def no_field(data, t, y, out):
 
 
 @njit(cache=True)
+def no_watch(data, t, y):
+    """Watch kernel of problems without compiled events (never stops a loop)."""
+    return False
+
+
+@njit(cache=True)
 def no_dexpinv(data, u, w, out):
     """Placeholder of problems without a separate dexpinv (never called)."""
 
@@ -219,6 +225,10 @@ class EngineKernels:
         ``view(data, u)`` and ``views(data, K)``: the kernels' shape of a flat increment
         ``(m,)`` and of rows of increments ``(k, m)`` (views, made once per call); ``None``:
         flat.
+    watch : numba dispatcher or None
+        ``watch(data, t, y) -> bool`` after every accepted step: ``True`` ends the call
+        there (an event function changed sign, :meth:`CompiledStepper.watch`); ``None``:
+        never.
     cache : bool
         Whether the engine's loops for these kernels are cached on disk (``False`` for
         kernels that call a user's function).
@@ -236,6 +246,7 @@ class EngineKernels:
     copy_state: Callable | None = None
     increment_view: Callable | None = None
     increment_views: Callable | None = None
+    watch: Callable | None = None
     cache: bool = True
 
     @property
@@ -269,6 +280,10 @@ class CompiledProblem:
         values of the given type (a user's vector field): the loops are compiled once per
         function type, cached on disk, and call the function through its address, so a
         new function costs only its own compilation.
+    with_events : callable or None
+        ``with_events(cp, specs, t0, y0) -> CompiledProblem or None``: ``cp`` with the event
+        functions ``specs`` (:class:`~.events.EventSpec`) in its data, watched by the
+        kernels' ``watch`` from ``(t0, y0)``; ``None`` when they cannot be compiled.
     """
 
     kernels: EngineKernels
@@ -277,12 +292,13 @@ class CompiledProblem:
     pack: Callable
     unpack: Callable
     functions: tuple = ()
+    with_events: Callable | None = None
 
 
 # ====================================================================== the loops
 # Written once; ``engine_for`` compiles a copy per plugin with RATE, ACTION, ANGLE, SCALE,
 # END_STEP, FIELD, DEXPINV, NEW_STATE and COPY_STATE bound to its kernels.
-RATE = ACTION = ANGLE = SCALE = END_STEP = FIELD = DEXPINV = NEW_STATE = COPY_STATE = INC_VIEW = INC_VIEWS = None
+RATE = ACTION = ANGLE = SCALE = END_STEP = FIELD = DEXPINV = NEW_STATE = COPY_STATE = INC_VIEW = INC_VIEWS = WATCH = None
 
 
 def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs):
@@ -352,7 +368,8 @@ def _advance_fixed(data, m, A, b, cc, fsal, y, t_start, t_stop, dt, i_first, n_s
     :func:`~liegroup_int.integrators.drivers.integrate_fixed` from ``y`` at its time (step
     ``i`` ends at ``t_start + (i + 1) dt``, the last at ``t_stop``), stopping before the
     first step whose increment is not finite or rotates by more than ``max_angle``, or after
-    the first step that ends at or after ``t_return``. ``F (2, m)`` and ``c (3,)`` carry the
+    the first step that ends at or after ``t_return`` or after which ``WATCH`` is true (an
+    event's sign change). ``F (2, m)`` and ``c (3,)`` carry the
     FSAL memory from call to call (:func:`_carry`; ``c`` zero: none).
 
     Returns ``(y, steps, status, t, t_fail, h_min, h_max, angle, quadrature, evals, y_prev, K,
@@ -382,7 +399,7 @@ def _advance_fixed(data, m, A, b, cc, fsal, y, t_start, t_stop, dt, i_first, n_s
         t_prev, t = t, t_next
         h_min, h_max = min(h_min, h), max(h_max, h)
         quad += q
-        if t >= t_return:
+        if WATCH(data, t, y0) or t >= t_return:
             _carry(c, i0, have_f0, q0)
             return y0, i + 1 - i_first, ADVANCE_OK, t, np.nan, h_min, h_max, 0.0, quad, evals, y1, K, t_prev
     _carry(c, i0, have_f0, q0)
@@ -404,7 +421,7 @@ def _error_norm(err, s0, s1, rtol, atol):
 def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, t_land, h, err_prev, rate, rtol, atol, h_max,
                       max_steps_left, max_angle, g, F, c):
     """Accepted and rejected embedded steps from ``(t, y)`` until the first accepted step
-    that ends at or after ``stop``: the loop body of
+    that ends at or after ``stop`` (or after which ``WATCH`` is true): the loop body of
     :func:`~liegroup_int.integrators.drivers.integrate_adaptive`, controller gains ``g``
     (:meth:`PIController.gains`) and memory ``err_prev``, ``rate``
     (:func:`~.controller.rotation_rate`). Steps are shortened to land on ``t_land`` only
@@ -456,7 +473,7 @@ def _advance_adaptive(data, m, A, b, cc, e, fsal, y, t, stop, t_land, h, err_pre
             h_max_acc = h_try if h_try > h_max_acc else h_max_acc
             h, err_prev = _h_accepted(err, err_prev, h_try, h_max, g)
             h = _rotation_cap(h, rate, max_angle, g)
-            if land or t >= stop:
+            if WATCH(data, t, y0) or land or t >= stop:
                 _carry(c, i0, have_f0, q0)
                 return (y0, t, h, err_prev, rate, steps, rejected, attempts, h_min_acc, h_max_acc, ADAPTIVE_OK,
                         quad, evals, y1, K, t_prev)
@@ -497,7 +514,7 @@ def _source_hash(kernels: EngineKernels) -> str:
     files = {p for p in Path(__file__).resolve().parents[1].rglob("*.py")}
     for k in (kernels.rate, kernels.action, kernels.angle, kernels.scale, kernels.end_step, kernels.field,
               kernels.dexpinv, kernels.new_state, kernels.copy_state, kernels.increment_view,
-              kernels.increment_views):
+              kernels.increment_views, kernels.watch):
         if k is not None:
             files.add(Path(inspect.getfile(getattr(k, "py_func", k))).resolve())
     h = hashlib.sha1()
@@ -516,7 +533,7 @@ def engine_for(kernels: EngineKernels) -> Engine:
               END_STEP=kernels.end_step or no_end_step, FIELD=kernels.field or no_field,
               DEXPINV=kernels.dexpinv or no_dexpinv, NEW_STATE=kernels.new_state or flat_new_state,
               COPY_STATE=kernels.copy_state or flat_copy_state, INC_VIEW=kernels.increment_view or flat_view,
-              INC_VIEWS=kernels.increment_views or flat_view)
+              INC_VIEWS=kernels.increment_views or flat_view, WATCH=kernels.watch or no_watch)
     tag = f"{kernels.name}_{_source_hash(kernels)}" if kernels.cache else kernels.name
     for name, fn in _HELPERS + _TEMPLATES:
         copy = types.FunctionType(fn.__code__, ns, name, fn.__defaults__)
@@ -585,6 +602,18 @@ class CompiledStepper:
         if entry is None:
             entry = self._entries[name] = typed_entry(loop, args, dict(self.cp.functions))
         return entry
+
+    def watch(self, specs, t0: float, y0) -> bool:
+        """Watch the events ``specs`` in the compiled loops from ``(t0, y0)``: a call then also
+        ends after a step over which one of them changes sign. ``False`` (nothing changes)
+        when the problem's kernels cannot (a Python ``g``, or kernels without ``watch``)."""
+        hook = self.cp.with_events
+        cp = hook(self.cp, specs, t0, y0) if hook is not None else None
+        if cp is None:
+            return False
+        self.cp = cp
+        self._entries.clear()
+        return True
 
     def memory(self, y) -> FsalMemory:
         """A new FSAL memory for runs from states like ``y`` (empty: the first call evaluates

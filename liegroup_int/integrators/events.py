@@ -51,6 +51,15 @@ def event_specs(events) -> list[EventSpec]:
     return specs
 
 
+def value(fn: Callable, t: float, y) -> float:
+    """``g(t, y)`` as a float; one line naming the result when it is not a number."""
+    v = fn(t, y)
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        raise ValueError(f"event g(t, y) must return a number, got {type(v).__name__} of shape {np.shape(v)}") from None
+
+
 def triggered(g_old: float, g_new: float, direction: float) -> bool:
     """Whether a step from ``g_old`` to ``g_new`` crosses zero in ``direction`` (scipy's rule)."""
     up = g_old <= 0 <= g_new
@@ -71,7 +80,7 @@ class EventTracker:
 
     def __init__(self, specs: list[EventSpec], t0: float, y0):
         self.specs = specs
-        self.g = [float(s.fn(t0, y0)) for s in specs]
+        self.g = [value(s.fn, t0, y0) for s in specs]
         self.t_events: list[list[float]] = [[] for _ in specs]
         self.y_events: list[list] = [[] for _ in specs]
         self.counts = [0] * len(specs)
@@ -79,7 +88,7 @@ class EventTracker:
     def step(self, dense: Callable, t_old: float, t_new: float, y_new) -> float | None:
         """Records the events of the step; returns the time of a terminal one, else ``None``.
         ``dense()`` returns the step's interpolant (built only when an event is found)."""
-        g_new = [float(s.fn(t_new, y_new)) for s in self.specs]
+        g_new = [value(s.fn, t_new, y_new) for s in self.specs]
         hits = [i for i, s in enumerate(self.specs) if triggered(self.g[i], g_new[i], s.direction)]
         self.g = g_new
         if not hits:
@@ -131,6 +140,7 @@ class DenseRun:
         self.events = EventTracker(specs, t0, y0) if specs else None
         self.t0, self.y0 = t0, y0
         self.last_observed = t0
+        self.watched = False  # the compiled engine checks the events' signs itself (attach)
         if observer is not None:
             observer(t0, y0)
 
@@ -144,6 +154,8 @@ class DenseRun:
 
         if self.pieces is not None:
             self.pieces.append(dense())
+        if self.watched:  # steps were skipped: the signs to compare are those at this step's start
+            self.events.g = [value(s.fn, t_old, y_old) for s in self.events.specs]
         stop = self.events.step(dense, t_old, t_new, y_new) if self.events is not None else None
         t_hi = t_new if stop is None else stop
         while self.i_eval < self.t_eval.size and self.t_eval[self.i_eval] <= t_hi:
@@ -154,11 +166,19 @@ class DenseRun:
         self.stopped = True
         return stop, dense()(stop)
 
+    def attach(self, stepper) -> None:
+        """Let the compiled ``stepper`` watch the events' signs (numba-compiled ``g`` on a
+        problem whose kernels can), so that it hands over only the steps over which one
+        changes sign besides those :meth:`next_stop` asks for."""
+        if self.events is not None:
+            self.watched = stepper.watch(self.events.specs, self.t0, self.y0)
+
     def next_stop(self, t: float) -> float:
         """The first step after ``t`` that must be seen ends at or after this time (the
-        compiled engine hands over only that step): ``t`` (every step) while events are
-        tracked or the interpolants kept, else the next output time (``inf`` past the last)."""
-        if self.pieces is not None or self.events is not None:
+        compiled engine hands over only that step): ``t`` (every step) while the
+        interpolants are kept or events are tracked here, else the next output time
+        (``inf`` past the last)."""
+        if self.pieces is not None or (self.events is not None and not self.watched):
             return t
         return float(self.t_eval[self.i_eval]) if self.i_eval < self.t_eval.size else math.inf
 
