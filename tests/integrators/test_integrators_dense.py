@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 
 from liegroup_int import SO3, Product, Rn, integrate
 from liegroup_int.integrators import GroupProblem, StateRecorder, integrate_adaptive, integrate_fixed, resolve_method
+from liegroup_int.bench.free_body import f_njit  # the README's body as a numba.njit field
 from liegroup_int.problems import RigidBody
 from liegroup_int.problems.rigid_body_se3 import FreeBody
 from liegroup_int.tableaux import REGISTRY, RK4
@@ -141,19 +142,6 @@ def test_output_times_do_not_change_the_steps():
     assert landing.steps > 1.4 * bare.stats.steps, landing.steps
 
 
-@njit
-def free_body_njit(t, y):
-    """:func:`free_body` for the compiled engine (``y`` flat: ``R`` row by row, then ``W``)."""
-    out = np.empty(6)
-    for i in range(3):
-        out[i] = y[3 * i] * y[9] + y[3 * i + 1] * y[10] + y[3 * i + 2] * y[11]
-    w0, w1, w2 = y[9], y[10], y[11]
-    out[3] = (2.0 * w1 * w2 - 3.0 * w2 * w1) / 1.0
-    out[4] = (3.0 * w2 * w0 - 1.0 * w0 * w2) / 2.0
-    out[5] = (1.0 * w0 * w1 - 2.0 * w1 * w0) / 3.0
-    return out
-
-
 def test_output_times_do_not_change_the_compiled_steps():
     """The same run with a ``numba.njit`` field: the steps run in the compiled engine, which
     hands Python only the steps with an output time inside. 817 steps and 4903 evaluations
@@ -164,10 +152,10 @@ def test_output_times_do_not_change_the_compiled_steps():
     4.6e-9 at most near a flip (asserted 1e-13 up to t = 1 and 5e-8 over the run)."""
     kw = dict(space=FB_SPACE, method="rkmk45", rtol=1e-9, atol=1e-9)
     t_eval = np.linspace(0.0, 20.0, 201)
-    bare = integrate(free_body_njit, FB_Y0, (0.0, 20.0), **kw)
-    q4 = integrate(free_body_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, dense_order=4, **kw)
-    q5 = integrate(free_body_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, **kw)
-    generic = integrate(free_body_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, monitor=lambda t, y, s: None, **kw)
+    bare = integrate(f_njit, FB_Y0, (0.0, 20.0), **kw)
+    q4 = integrate(f_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, dense_order=4, **kw)
+    q5 = integrate(f_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, **kw)
+    generic = integrate(f_njit, FB_Y0, (0.0, 20.0), t_eval=t_eval, monitor=lambda t, y, s: None, **kw)
     assert (q4.stats.steps, q4.stats.rhs_evals) == (bare.stats.steps, bare.stats.rhs_evals) == (817, 4903)
     assert (q5.stats.steps, q5.stats.rhs_evals) == (generic.stats.steps, generic.stats.rhs_evals)
     assert q5.stats.rhs_evals > 4903
@@ -187,8 +175,8 @@ def test_compiled_events_and_dense_output_match_the_python_loop():
 
     flip.terminal, flip.direction = True, -1
     kw = dict(space=FB_SPACE, method="rkmk45", rtol=1e-9, atol=1e-9, events=flip, dense_output=True)
-    a = integrate(free_body_njit, FB_Y0, (0.0, 20.0), **kw)
-    b = integrate(free_body_njit, FB_Y0, (0.0, 20.0), monitor=lambda t, y, s: None, **kw)
+    a = integrate(f_njit, FB_Y0, (0.0, 20.0), **kw)
+    b = integrate(f_njit, FB_Y0, (0.0, 20.0), monitor=lambda t, y, s: None, **kw)
     assert a.status == b.status == 1 and a.stats.steps == b.stats.steps > 50
     assert abs(a.t_events[0][0] - b.t_events[0][0]) < 1e-12 and abs(a.t_events[0][0] - 2.741068) < 1e-6
     ts = np.linspace(0.0, min(a.sol.t_max, b.sol.t_max), 37)
