@@ -7,7 +7,9 @@ run of a kind of problem pays for it. This module does that compilation up front
 process per kernel set, so the sets compile side by side on a machine's cores.
 
 A kernel set is what one family of runs compiles: the beam's Galerkin formulation (the
-default), its primal collocation (opt-in), the rigid body; each with the engine's
+default), its primal collocation (opt-in), the rigid body, and the loops that run a user's
+``numba.njit`` field (``user_field``: they take the field as a first-class function value,
+so one compilation serves every field); each with the engine's
 fixed-step loop and, on request, its adaptive loop. The loops' machine code does not depend on the scene's numbers (sizes,
 constants, tableau), so warming one scene of a family serves every scene of it.
 """
@@ -17,6 +19,7 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass
+from typing import Callable
 
 __all__ = ["KernelSet", "KERNEL_SETS", "compile_sets", "warm_scene"]
 
@@ -28,9 +31,30 @@ class KernelSet:
     """One family of runs: a built-in scene and the overrides that select the family."""
 
     name: str
-    scene: str
+    scene: str | None
     overrides: tuple[str, ...]
     description: str
+    warm: Callable[[], float] | None = None  # instead of a scene: a function that warms the set
+
+
+def warm_user_fields() -> float:
+    """Compile the engine's loops for a user's ``numba.njit`` field on the built-in groups
+    (points of one and of two dimensions) and on ``Sphere()``, fixed-step and adaptive;
+    returns the seconds it took."""
+    import numpy as np
+    from numba import njit
+
+    from . import Product, Rn, SO3, Sphere, integrate
+
+    c = time.perf_counter()
+    zero3 = njit(lambda t, y: np.zeros(3))
+    zero6 = njit(lambda t, y: np.zeros(6))
+    cases = ((zero3, np.eye(3), SO3), (zero6, np.concatenate([np.eye(3).ravel(), np.zeros(3)]), Product(SO3, Rn(3))),
+             (zero3, np.array([0.0, 0.0, 1.0]), Sphere()))
+    for f, y0, space in cases:
+        integrate(f, y0, (0.0, 1e-3), space=space, method="rkmk4", dt=1e-3)
+        integrate(f, y0, (0.0, 1e-3), space=space, method="rkmk45", rtol=1e-6, atol=1e-9)
+    return time.perf_counter() - c
 
 
 #: The kernel sets: those of the built-in scenes as shipped first, then the opt-in ones.
@@ -45,6 +69,8 @@ KERNEL_SETS: dict[str, KernelSet] = {
                              "beam, primal collocation (the paper's method, opt-in), fixed step"),
     "beam_primal_adaptive": KernelSet("beam_primal_adaptive", "cantilever", ("space.formulation=primal",) + _ADAPTIVE,
                                       "beam, primal collocation, adaptive pairs"),
+    "user_field": KernelSet("user_field", None, (), "a user's numba.njit field on the groups and Sphere(), fixed "
+                            "step and adaptive (integrate(f, ...))", warm=warm_user_fields),
 }
 
 #: What ``liegroup-int compile`` prepares without ``--all``: the built-in scenes as shipped
@@ -73,7 +99,7 @@ def warm_scene(scene_name: str, overrides: tuple[str, ...] = ()) -> float:
 
 def _warm_set(name: str) -> tuple[str, float]:
     ks = KERNEL_SETS[name]
-    return name, warm_scene(ks.scene, ks.overrides)
+    return name, (ks.warm() if ks.warm is not None else warm_scene(ks.scene, ks.overrides))
 
 
 def compile_sets(names, jobs: int | None = None, report=None) -> dict[str, float]:
