@@ -7,8 +7,9 @@ unboxes a NamedTuple of 20 arrays in ~5 us (a plain array in ~0.1 us), more than
 stage rate at small ``n``, so the data cross into compiled code as two arrays: ``flat``
 (every float field, raveled) and ``head`` (per field its offset and shape, then every int
 field). :func:`pack` builds them from a NamedTuple; the formulation's compiled ``unpack``
-reads the fields back (views, no copy) with :func:`f1` ... :func:`i2`, in the order of the
-NamedTuple's fields; :func:`views` gives the same views in Python.
+reads the fields back (views, no copy) with :func:`unpack_as`, which takes each field's
+dimensions from the NamedTuple's annotations (:data:`F1` ... :data:`I2`); the same function
+gives the same views in Python.
 
 The kernels that take the data are compiled without numba's reference counting
 (``_nrt=False``): they allocate nothing (numba refuses to compile an allocation there),
@@ -19,13 +20,22 @@ slower at n = 21).
 
 from __future__ import annotations
 
+from typing import Annotated, get_type_hints
+
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
 from ....groups.kernels_numba import normalize_rotations
 from ....integrators.engine import CompiledProblem, EngineKernels
+from .band import max_window_norm
 
 _HW = 5  # head entries per field: offset, then up to four dimensions
+
+#: Field annotations of the kernels' NamedTuples: float arrays of 1 to 4 dimensions, int
+#: arrays of 1 or 2 (``float``, ``int`` and ``bool`` for scalars).
+F1, F2, F3, F4 = (Annotated[np.ndarray, f"f{k}"] for k in range(1, 5))
+I1, I2 = (Annotated[np.ndarray, f"i{k}"] for k in range(1, 3))
 
 
 def c64(a):
@@ -46,10 +56,11 @@ def pack(data) -> tuple[np.ndarray, np.ndarray]:
     flat = np.zeros(fsize)
     head = np.zeros(_HW * nf + isize, dtype=np.int64)
     fpos, ipos = 0, _HW * nf
-    for k, a in enumerate(data):
+    for k, (a, r) in enumerate(zip(data, field_readers(type(data)))):
         a = np.asarray(a)
-        if a.ndim > _HW - 1:
-            raise ValueError(f"{type(data).__name__}.{data._fields[k]}: more than {_HW - 1} dimensions")
+        if a.ndim != (int(r[1:]) if r[1:].isdigit() else 0) or _is_int(a) != (r[0] != "f"):
+            raise ValueError(f"{type(data).__name__}.{data._fields[k]}: a {a.dtype} array of "
+                             f"{a.ndim} dimensions, annotated {r}")
         head[_HW * k + 1:_HW * k + 1 + a.ndim] = a.shape
         if _is_int(a):
             head[_HW * k] = ipos
@@ -60,19 +71,6 @@ def pack(data) -> tuple[np.ndarray, np.ndarray]:
             flat[fpos:fpos + a.size] = a.ravel()
             fpos += a.size
     return flat, head
-
-
-def views(cls, flat: np.ndarray, head: np.ndarray, like):
-    """The NamedTuple ``cls`` of views into ``flat`` and ``head``, fields shaped as ``like``'s."""
-    out = []
-    for k, a in enumerate(like):
-        a = np.asarray(a)
-        o = int(head[_HW * k])
-        src = head if _is_int(a) else flat
-        v = src[o:o + a.size].reshape(a.shape)
-        data_field = like[k]
-        out.append(v if a.ndim else type(data_field)(v[()]))
-    return cls(*out)
 
 
 @njit(cache=True, inline="always")
@@ -107,19 +105,69 @@ def fs(flat, head, k):
 
 @njit(cache=True, inline="always")
 def i1(flat, head, k):
-    o = head[_HW * k]
-    return head[o:o + head[_HW * k + 1]]
+    return f1(head, head, k)
 
 
 @njit(cache=True, inline="always")
 def i2(flat, head, k):
-    o, s0, s1 = head[_HW * k], head[_HW * k + 1], head[_HW * k + 2]
-    return head[o:o + s0 * s1].reshape((s0, s1))
+    return f2(head, head, k)
 
 
 @njit(cache=True, inline="always")
 def is_(flat, head, k):
-    return head[head[_HW * k]]
+    return fs(head, head, k)
+
+
+@njit(cache=True, inline="always")
+def bs(flat, head, k):
+    return is_(flat, head, k) != 0
+
+
+_READERS = {"f1": f1, "f2": f2, "f3": f3, "f4": f4, "i1": i1, "i2": i2, "fs": fs, "is_": is_, "bs": bs}
+
+
+def field_readers(cls) -> tuple[str, ...]:
+    """The reader of each field of the NamedTuple ``cls`` (:func:`f1` ... :func:`bs`),
+    from its annotations (:data:`F1` ... :data:`I2`, ``float``, ``int``, ``bool``)."""
+    hints = get_type_hints(cls, include_extras=True)
+    scalars = {float: "fs", int: "is_", bool: "bs"}
+    out = []
+    for name in cls._fields:
+        hint = hints[name]
+        meta = getattr(hint, "__metadata__", None)
+        if meta is None and hint not in scalars:
+            raise TypeError(f"{cls.__name__}.{name}: annotate with F1..F4, I1, I2, float, int or bool")
+        out.append(meta[0] if meta else scalars[hint])
+    return tuple(out)
+
+
+def unpack_as(cls, flat, head):
+    """The NamedTuple ``cls`` of views into :func:`pack`'s ``flat`` and ``head`` (in
+    compiled code and in Python; the fields' dimensions come from ``cls``'s annotations)."""
+    out = []
+    for k, r in enumerate(field_readers(cls)):
+        o = int(head[_HW * k])
+        if not r[1:].isdigit():
+            out.append({"fs": float, "is_": int, "bs": bool}[r]((flat if r == "fs" else head)[o]))
+        else:
+            shape = tuple(int(x) for x in head[_HW * k + 1:_HW * k + 1 + int(r[1])])
+            out.append((flat if r[0] == "f" else head)[o:o + int(np.prod(shape))].reshape(shape))
+    return cls(*out)
+
+
+@overload(unpack_as)
+def _unpack_as(cls, flat, head):
+    pycls = cls.instance_class
+    args = ", ".join(f"{r}(flat, head, {k})" for k, r in enumerate(field_readers(pycls)))
+    scope = dict(_READERS, _cls=pycls)
+    exec(f"def impl(cls, flat, head):\n    return _cls({args})\n", scope)
+    return scope["impl"]
+
+
+@njit(cache=True, _nrt=False)
+def call_angle(u, band, j0):
+    """Largest ``|Theta|`` at the points of the increment ``u`` (:func:`~.band.max_window_norm`)."""
+    return max_window_norm(band, j0, u[1])
 
 
 # ====================================================================== engine kernels
@@ -191,11 +239,17 @@ def _copy_state6(data, src, dst):
     _copy(src[5], dst[5])
 
 
-def engine_kernels(name: str, rate, action, angle, fields: int) -> EngineKernels:
+@njit(cache=True, inline="always")
+def engine_angle(data, u):
+    """Largest ``|Theta|`` at the points of the increment ``u`` (any formulation's data)."""
+    return max_window_norm(data[0].band, data[0].j0, u[1])
+
+
+def engine_kernels(name: str, rate, action, fields: int) -> EngineKernels:
     """The compiled engine's kernels of a beam formulation whose state has ``fields``
     arrays (5 or 6)."""
     new_state, copy_state = {5: (_new_state5, _copy_state5), 6: (_new_state6, _copy_state6)}[fields]
-    return EngineKernels(name, rate, action, angle, engine_scale, end_step=engine_end_step,
+    return EngineKernels(name, rate, action, engine_angle, engine_scale, end_step=engine_end_step,
                          new_state=new_state, copy_state=copy_state, increment_view=engine_increment_view,
                          increment_views=engine_increment_views)
 
@@ -204,16 +258,17 @@ class KernelSet:
     """Named data and thin wrappers of one beam formulation's compiled kernels.
 
     A subclass sets :attr:`data_cls` and :attr:`fields` (the state's arrays, in the
-    kernels' order) and implements :meth:`kernels`: ``(action, rates, rotation_angle,
-    engine kernels)`` called as ``action(u, *y, *y_out, flat, head)``, ``rates(*y, u, out,
-    flat, head) -> power`` and ``rotation_angle(u, flat, head)``.
+    kernels' order) and implements :meth:`kernels`: ``(action, rates, engine kernels)``
+    called as ``action(u, *y, *y_out, flat, head)`` and ``rates(*y, u, out, flat, head) ->
+    power``. The rotation angle of an increment is the same for every formulation
+    (:func:`call_angle` on the data's ``band`` and ``j0``).
     """
 
     data_cls: type = tuple
     fields: tuple[str, ...] = ()
 
     def __init__(self, data, table, n: int):
-        self._table, self.n, self._like = table, n, data
+        self._table, self.n = table, n
         self.flat, self.head = pack(data)
         self._pw = np.zeros(1)  # the power of the last increment_rate call
         self._zero = np.zeros((4, n, 3))
@@ -225,7 +280,7 @@ class KernelSet:
     def __setstate__(self, state):
         self.__dict__.update(state)
         #: the kernels' data as a NamedTuple of views into ``flat`` and ``head``
-        self.data = views(self.data_cls, self.flat, self.head, self._like)
+        self.data = unpack_as(self.data_cls, self.flat, self.head)
 
     def kernels(self) -> tuple:
         raise NotImplementedError
@@ -249,7 +304,7 @@ class KernelSet:
         return self.increment_rate(t, y, self._zero)
 
     def rotation_angle(self, u) -> float:
-        return float(self.kernels()[2](c64(u), self.flat, self.head))
+        return float(call_angle(c64(u), self.data.band, self.data.j0))
 
     def compiled_problem(self, state_cls):
         """What the compiled engine needs (:class:`~liegroup_int.integrators.engine.CompiledProblem`),
@@ -266,5 +321,5 @@ class KernelSet:
         def unpack_state(arrays):
             return state_cls(*arrays)
 
-        data = views(self.data_cls, self.flat.copy(), self.head, self._like)
-        return CompiledProblem(self.kernels()[3], (data, *enc), lambda packed: 12 * n, pack_state, unpack_state)
+        data = unpack_as(self.data_cls, self.flat.copy(), self.head)
+        return CompiledProblem(self.kernels()[2], (data, *enc), lambda packed: 12 * n, pack_state, unpack_state)

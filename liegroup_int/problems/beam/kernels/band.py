@@ -150,22 +150,23 @@ def window2(B, f, g, i, j0, X, q):
 
 @njit(cache=True, inline="always")
 def window3(B, i, j0, X, q):
-    """:func:`window` of basis matrices 0, 1 and 2 together (one pass over ``X``)."""
-    s0 = s1 = s2 = t0 = t1 = t2 = r0 = r1 = r2 = 0.0
-    js = j0[i]
-    for k in range(B.shape[2]):
-        a, b, c = B[0, i, k], B[1, i, k], B[2, i, k]
-        x0, x1, x2 = X[js + k, q], X[js + k, q + 1], X[js + k, q + 2]
-        s0 += a * x0
-        s1 += a * x1
-        s2 += a * x2
-        t0 += b * x0
-        t1 += b * x1
-        t2 += b * x2
-        r0 += c * x0
-        r1 += c * x1
-        r2 += c * x2
-    return (s0, s1, s2), (t0, t1, t2), (r0, r1, r2)
+    """:func:`window` of basis matrices 0, 1 and 2 together."""
+    t, r = window2(B, 1, 2, i, j0, X, q)
+    return window(B, 0, i, j0, X, q), t, r
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def max_window_norm(B, j0, X):
+    """``max_i |window(B, 0, i, j0, X, 0)|`` over the rows of ``B`` (NaN wins, as ``np.max``)."""
+    best = 0.0
+    for i in range(B.shape[1]):
+        s0, s1, s2 = window(B, 0, i, j0, X, 0)
+        a = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        if a != a:
+            return a
+        if a > best:
+            best = a
+    return best
 
 
 @njit(cache=True, inline="always")

@@ -31,21 +31,10 @@ from numba import njit
 from ....groups.kernels_numba import coef_ABCB1C1, coef_D
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
-from .adapters import c64, f1, f2, f3, fs, i1, is_
+from .adapters import F1, F2, F3, I1, c64
 from .band import basis_windows, factor_mc, forward_row, solve_cols, window, window2, window3
-from .physics import (
-    dexpinv,
-    dissipation,
-    exp_rows,
-    gamma_rate,
-    gyroscopic,
-    jr_times,
-    jr_times_s,
-    load_power,
-    point_load,
-    resultant,
-    strain,
-)
+from .physics import (dexpinv, dissipation, exp_rows, gamma_rate, gyroscopic, jr_times, jr_times_s,
+                      load_power, point_load, resultant, strain)
 from .profiles import LoadTable, set_loads
 from .vec3 import (add, axpy, cross, div, dot, inertia, norm, put, put_at, rot, rot_T, row, scale, sub,
                    sym_add, sym_solve, sym_times)
@@ -70,62 +59,53 @@ FORCE, COUPLE, ALPHA, ACC = 0, 1, 2, 3  # an end's rows of ``loads``, from its `
 class CollocationData(NamedTuple):
     """Constant data and work arrays of the collocation kernels (``n`` points)."""
 
-    band: np.ndarray  # (3, n, W) row windows of N0, N1, N2
-    j0: np.ndarray  # (n,) first column of each window
-    lu: np.ndarray  # (n, lower + upper + 1) banded LU of M_c, reciprocal pivots
-    minv: np.ndarray  # (n, n) dense inverse of M_c, or (0, 0): banded solve
+    band: F3  # (3, n, W) row windows of N0, N1, N2
+    j0: I1  # (n,) first column of each window
+    lu: F2  # (n, lower + upper + 1) banded LU of M_c, reciprocal pivots
+    minv: F2  # (n, n) dense inverse of M_c, or (0, 0): banded solve
     lower: int
     upper: int
-    ser: np.ndarray  # SO(3) series table (groups.kernels_numba.series_table)
+    ser: F2  # SO(3) series table (groups.kernels_numba.series_table)
     thr: float
-    gamma0: np.ndarray  # (n, 3) reference strains and curvatures
-    K0: np.ndarray
-    K0_s: np.ndarray
-    CN: np.ndarray  # (n, 3) section per point
-    CM: np.ndarray
-    J: np.ndarray
-    mu: np.ndarray  # (n,)
-    quad: np.ndarray  # (n,) quadrature weights
+    gamma0: F2  # (n, 3) reference strains and curvatures
+    K0: F2
+    K0_s: F2
+    CN: F2  # (n, 3) section per point
+    CM: F2
+    J: F2
+    mu: F1  # (n,)
+    quad: F1  # (n,) quadrature weights
     tau: float
     power: bool  # compute the power of the loads (BeamProblem.quadrature_rate)
     has_q: bool
     has_m: bool
-    loads: np.ndarray  # (rows, 3) loads at the stage time (module docstring)
-    end_index: np.ndarray  # (ne,) per end: point, first row in loads, outward normal, C*/l_s,
-    end_row: np.ndarray
-    end_normal: np.ndarray
-    end_factor: np.ndarray
-    end_force: np.ndarray  # force and moment Neumann rows, follower loads, prescribed
-    end_moment: np.ndarray  # rotation (moving), prescribed displacement (sliding)
-    end_follower: np.ndarray
-    end_moving: np.ndarray
-    end_sliding: np.ndarray
-    joint_a: np.ndarray  # (nj,) rigid joints: rows a and b, C*/l_s of both, first row in loads
-    joint_b: np.ndarray
-    joint_factor: np.ndarray
-    joint_row: np.ndarray
-    fixp: np.ndarray  # (n,) rows with prescribed zero position and velocity rates
-    fixr: np.ndarray  # (n,) and rotation and angular velocity rates
-    rhs: np.ndarray  # (n, 12) work: right-hand sides
-    Gt: np.ndarray  # (n, 3) work: R^T c_s, N, M per point
-    N: np.ndarray
-    M: np.ndarray
-    tmp: np.ndarray  # (n, 12) work of the dense solve, or (0, 12)
+    loads: F2  # (rows, 3) loads at the stage time (module docstring)
+    end_index: I1  # (ne,) per end: point, first row in loads, outward normal, C*/l_s,
+    end_row: I1
+    end_normal: F1
+    end_factor: F1
+    end_force: I1  # force and moment Neumann rows, follower loads, prescribed
+    end_moment: I1  # rotation (moving), prescribed displacement (sliding)
+    end_follower: I1
+    end_moving: I1
+    end_sliding: I1
+    joint_a: I1  # (nj,) rigid joints: rows a and b, C*/l_s of both, first row in loads
+    joint_b: I1
+    joint_factor: F1
+    joint_row: I1
+    fixp: I1  # (n,) rows with prescribed zero position and velocity rates
+    fixr: I1  # (n,) and rotation and angular velocity rates
+    rhs: F2  # (n, 12) work: right-hand sides
+    Gt: F2  # (n, 3) work: R^T c_s, N, M per point
+    N: F2
+    M: F2
+    tmp: F2  # (n, 12) work of the dense solve, or (0, 12)
 
 
 @njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
 def unpack(flat, head):
     """The :class:`CollocationData` of :func:`.adapters.pack`'s arrays (views)."""
-    return CollocationData(
-        f3(flat, head, 0), i1(flat, head, 1), f2(flat, head, 2), f2(flat, head, 3), is_(flat, head, 4),
-        is_(flat, head, 5), f2(flat, head, 6), fs(flat, head, 7), f2(flat, head, 8), f2(flat, head, 9),
-        f2(flat, head, 10), f2(flat, head, 11), f2(flat, head, 12), f2(flat, head, 13), f1(flat, head, 14),
-        f1(flat, head, 15), fs(flat, head, 16), is_(flat, head, 17) != 0, is_(flat, head, 18) != 0,
-        is_(flat, head, 19) != 0, f2(flat, head, 20), i1(flat, head, 21), i1(flat, head, 22),
-        f1(flat, head, 23), f1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27),
-        i1(flat, head, 28), i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), f1(flat, head, 32),
-        i1(flat, head, 33), i1(flat, head, 34), i1(flat, head, 35), f2(flat, head, 36), f2(flat, head, 37),
-        f2(flat, head, 38), f2(flat, head, 39), f2(flat, head, 40))
+    return ad.unpack_as(CollocationData, flat, head)
 
 
 # ====================================================================== action
@@ -162,19 +142,6 @@ def action_primal(u, c, v, w, R, K, Ks, c2, v2, w2, R2, K2, Ks2, d):
         k = row(K, i)
         put(K2, i, add(k, x))
         put(Ks2, i, add(sub(row(Ks, i), cross(k, x)), rot_T(R, i, jr_times_s(cB, cC, cB1, cC1, th, ts, tss))))
-
-
-@njit(cache=True, fastmath=False, _nrt=False)
-def rotation_angle(u, d):
-    """``max_i |(N0 u[1])_i|`` (NaN wins, as ``np.max``)."""
-    best, u1 = 0.0, u[1]
-    for i in range(u.shape[1]):
-        a = norm(window(d.band, 0, i, d.j0, u1, 0))
-        if a != a:
-            return a
-        if a > best:
-            best = a
-    return best
 
 
 # ====================================================================== stage rates
@@ -361,10 +328,6 @@ def call_rates_primal(c, v, w, R, K, Ks, u, out, flat, head):
     return rates_primal(c, v, w, R, K, Ks, u, out, unpack(flat, head))
 
 
-@njit(cache=True, _nrt=False)
-def call_angle(u, flat, head):
-    return rotation_angle(u, unpack(flat, head))
-
 # ====================================================================== engine kernels
 # data = (CollocationData of views, load rows, load vectors, encoded profiles)
 # (ad.KernelSet.compiled_problem)
@@ -380,13 +343,8 @@ def engine_action(data, u, y0, y1):
     action_primal(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
 
 
-@njit(cache=True, inline="always")
-def engine_angle(data, u):
-    return rotation_angle(u, data[0])
-
-
 #: The engine's kernels of the collocation beam.
-ENGINE_KERNELS = ad.engine_kernels("beam", engine_rate, engine_action, engine_angle, 6)
+ENGINE_KERNELS = ad.engine_kernels("beam", engine_rate, engine_action, 6)
 STATE_FIELDS = ("c", "v", "w", "R", "K", "K_s")
 
 
@@ -494,7 +452,7 @@ class NumbaBeamKernels(ad.KernelSet):
         super().__init__(data, table, pb.n)
 
     def kernels(self) -> tuple:
-        return call_action_primal, call_rates_primal, call_angle, ENGINE_KERNELS
+        return call_action_primal, call_rates_primal, ENGINE_KERNELS
 
     def solve(self, x):
         """``M_c^-1`` on an increment-shaped array ``(4, n, 3)`` (copy)."""

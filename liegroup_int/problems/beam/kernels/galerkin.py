@@ -29,22 +29,10 @@ from numba import njit
 from ....groups.kernels_numba import coef_ABC, coef_D, series_table
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
-from .adapters import c64, f1, f2, f3, f4, fs, i1, i2, is_
+from .adapters import F1, F2, F3, F4, I1, I2, c64
 from .band import basis_windows, chol_solve9, window, window2
-from .physics import (
-    curvature_rate,
-    dexpinv,
-    dissipation,
-    exp_rows,
-    gamma_rate,
-    gyroscopic,
-    jr_times,
-    load_power,
-    point_load,
-    resultant,
-    rows_T_times,
-    strain,
-)
+from .physics import (curvature_rate, dexpinv, dissipation, exp_rows, gamma_rate, gyroscopic, jr_times,
+                      load_power, point_load, resultant, rows_T_times, strain)
 from .profiles import LoadTable, set_loads
 from .vec3 import add, axpy, cross, dot, neg, norm, put, rot, rot_T, row, scale, sub
 
@@ -56,70 +44,60 @@ class GalerkinData(NamedTuple):
     """Constant data and work arrays of the Galerkin kernels (``n`` control values, ``m``
     points)."""
 
-    band: np.ndarray  # (2, m, p + 1) basis windows B0, B1
-    j0: np.ndarray  # (m,)
-    wf: np.ndarray  # (m,) weights of the bending (full) and axial (reduced) quadratures
-    wa: np.ndarray
-    gamma0: np.ndarray  # (m, 3)
-    K0: np.ndarray
-    CN: np.ndarray  # (m, 3) section per point
-    CM: np.ndarray
-    J: np.ndarray
-    lv: np.ndarray  # (n, 3) distributed load vector int N q ds
-    U: np.ndarray  # (5, q + 1, n) Cholesky factors of mu M, M, J_1 M, J_2 M, J_3 M
-    dinv: np.ndarray  # (5, n) reciprocals of their diagonals
-    Cp: np.ndarray  # (n, kp) mass columns of the supported position rows fp
-    Cth: np.ndarray  # (n, kr) and of the supported rotation rows fr (M, then J_d M)
-    Crot: np.ndarray  # (3, n, kr)
-    fp: np.ndarray
-    fr: np.ndarray
-    ser: np.ndarray
+    band: F3  # (2, m, p + 1) basis windows B0, B1
+    j0: I1  # (m,)
+    wf: F1  # (m,) weights of the bending (full) and axial (reduced) quadratures
+    wa: F1
+    gamma0: F2  # (m, 3)
+    K0: F2
+    CN: F2  # (m, 3) section per point
+    CM: F2
+    J: F2
+    lv: F2  # (n, 3) distributed load vector int N q ds
+    U: F3  # (5, q + 1, n) Cholesky factors of mu M, M, J_1 M, J_2 M, J_3 M
+    dinv: F2  # (5, n) reciprocals of their diagonals
+    Cp: F2  # (n, kp) mass columns of the supported position rows fp
+    Cth: F2  # (n, kr) and of the supported rotation rows fr (M, then J_d M)
+    Crot: F3  # (3, n, kr)
+    fp: I1
+    fr: I1
+    ser: F2
     thr: float
     tau: float
     power: bool
     has_q: bool
     has_m: bool
-    loads: np.ndarray  # (rows, 3) at the stage time (module docstring)
-    end_index: np.ndarray  # (2,) control row, moving support, sliding support
-    end_moving: np.ndarray
-    end_sliding: np.ndarray
-    point_row: np.ndarray  # (nl,) loaded points: control row, point, has force, has couple,
-    point_pt: np.ndarray  # follower
-    point_force: np.ndarray
-    point_couple: np.ndarray
-    point_follower: np.ndarray
-    joint_ab: np.ndarray  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
-    joint_q: np.ndarray
-    Y: np.ndarray  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
-    Sinv: np.ndarray  # (3, 3 J, 3 J) S^-1 D: ball joints and hinges are 0 in Y[1:], Sinv[1:] (lam = 0)
-    keep: np.ndarray  # (10, 3) work: supported rows' forces, prescribed values
-    jr: np.ndarray  # (3 J,) work
-    body_row: np.ndarray  # (nb,) end bodies: control row, principal inertia (nb, 3)
-    body_J: np.ndarray
-    hinge_ab: np.ndarray  # (H, 4) hinges: rows a, b and points of a, b
-    hinge_E: np.ndarray  # (H, 2, 3) rows perpendicular to the material axis at b
-    hinge_Z: np.ndarray  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
-    hinge_C: np.ndarray  # (2 H, 2, 3) work: constraint rows on rows a, b
-    hinge_S: np.ndarray  # (2 H, 2 H + 1) work: capacitance and right-hand side
-    hinge_axis: np.ndarray  # (H, 3) material axis at b, Q = R0_a^T R0_b (H, 3, 3), stiffness and damping (H, 2)
-    hinge_Q: np.ndarray
-    hinge_kc: np.ndarray
+    loads: F2  # (rows, 3) at the stage time (module docstring)
+    end_index: I1  # (2,) control row, moving support, sliding support
+    end_moving: I1
+    end_sliding: I1
+    point_row: I1  # (nl,) loaded points: control row, point, has force, has couple,
+    point_pt: I1  # follower
+    point_force: I1
+    point_couple: I1
+    point_follower: I1
+    joint_ab: I2  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
+    joint_q: F3
+    Y: F4  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
+    Sinv: F3  # (3, 3 J, 3 J) S^-1 D: ball joints and hinges are 0 in Y[1:], Sinv[1:] (lam = 0)
+    keep: F2  # (10, 3) work: supported rows' forces, prescribed values
+    jr: F1  # (3 J,) work
+    body_row: I1  # (nb,) end bodies: control row, principal inertia (nb, 3)
+    body_J: F2
+    hinge_ab: I2  # (H, 4) hinges: rows a, b and points of a, b
+    hinge_E: F3  # (H, 2, 3) rows perpendicular to the material axis at b
+    hinge_Z: F3  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
+    hinge_C: F3  # (2 H, 2, 3) work: constraint rows on rows a, b
+    hinge_S: F2  # (2 H, 2 H + 1) work: capacitance and right-hand side
+    hinge_axis: F2  # (H, 3) material axis at b, Q = R0_a^T R0_b (H, 3, 3), stiffness and damping (H, 2)
+    hinge_Q: F3
+    hinge_kc: F2
 
 
 @njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
 def unpack(flat, head):
     """The :class:`GalerkinData` of :func:`.adapters.pack`'s arrays (views)."""
-    return GalerkinData(
-        f3(flat, head, 0), i1(flat, head, 1), f1(flat, head, 2), f1(flat, head, 3), f2(flat, head, 4),
-        f2(flat, head, 5), f2(flat, head, 6), f2(flat, head, 7), f2(flat, head, 8), f2(flat, head, 9),
-        f3(flat, head, 10), f2(flat, head, 11), f2(flat, head, 12), f2(flat, head, 13), f3(flat, head, 14),
-        i1(flat, head, 15), i1(flat, head, 16), f2(flat, head, 17), fs(flat, head, 18), fs(flat, head, 19),
-        is_(flat, head, 20) != 0, is_(flat, head, 21) != 0, is_(flat, head, 22) != 0, f2(flat, head, 23),
-        i1(flat, head, 24), i1(flat, head, 25), i1(flat, head, 26), i1(flat, head, 27), i1(flat, head, 28),
-        i1(flat, head, 29), i1(flat, head, 30), i1(flat, head, 31), i2(flat, head, 32), f3(flat, head, 33),
-        f4(flat, head, 34), f3(flat, head, 35), f2(flat, head, 36), f1(flat, head, 37), i1(flat, head, 38),
-        f2(flat, head, 39), i2(flat, head, 40), f3(flat, head, 41), f3(flat, head, 42), f3(flat, head, 43),
-        f2(flat, head, 44), f2(flat, head, 45), f3(flat, head, 46), f2(flat, head, 47))
+    return ad.unpack_as(GalerkinData, flat, head)
 
 
 # ====================================================================== action
@@ -140,17 +118,6 @@ def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, d):
             r = (R[i, a, 0], R[i, a, 1], R[i, a, 2])
             R2[i, a, 0], R2[i, a, 1], R2[i, a, 2] = rows_T_times(E, r)
         put(K2, i, add(rows_T_times(E, row(K, i)), jr_times(cB, cC, th, ts)))
-
-
-@njit(cache=True, fastmath=False, _nrt=False)
-def rotation_angle(u, d):
-    """Largest ``|Theta|`` at the points of the increment ``u``."""
-    best, u1 = 0.0, u[1]
-    for i in range(d.band.shape[1]):
-        a = norm(window(d.band, 0, i, d.j0, u1, 0))
-        if a > best or a != a:
-            best = a
-    return best
 
 
 # ====================================================================== stage rates
@@ -455,10 +422,6 @@ def call_rates(c, v, w, R, K, u, out, flat, head):
     return rates(c, v, w, R, K, u, out, unpack(flat, head), True)
 
 
-@njit(cache=True, _nrt=False)
-def call_angle(u, flat, head):
-    return rotation_angle(u, unpack(flat, head))
-
 # ====================================================================== engine kernels
 # data = (GalerkinData of views, load rows, load vectors, encoded profiles)
 @njit(cache=True, inline="always")
@@ -472,12 +435,7 @@ def engine_action(data, u, y0, y1):
     action(u, y0[0], y0[1], y0[2], y0[3], y0[4], y1[0], y1[1], y1[2], y1[3], y1[4], data[0])
 
 
-@njit(cache=True, inline="always")
-def engine_angle(data, u):
-    return rotation_angle(u, data[0])
-
-
-ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, engine_angle, 5)
+ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, 5)
 
 
 @njit(cache=True, inline="always")
@@ -659,4 +617,4 @@ class NumbaGalerkinKernels(ad.KernelSet):
         super().__init__(data, table, pb.n)
 
     def kernels(self) -> tuple:
-        return call_action, call_rates, call_angle, ENGINE_KERNELS
+        return call_action, call_rates, ENGINE_KERNELS
