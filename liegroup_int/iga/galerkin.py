@@ -238,11 +238,19 @@ def reference_strain_jacobian(gs: "GalerkinSpace") -> StrainJacobian:
     return StrainJacobian(g, k)
 
 
+#: Smallest squared Cholesky pivot, relative to its diagonal entry, of a point mass that
+#: determines the basis (a B-spline Gram matrix has pivots of order one; a rule with too
+#: few points leaves one at round-off, of either sign).
+DEFINITE_PIVOT = 1e-10
+
+
 def _check_definite(A: np.ndarray, rule: str) -> None:
     """One-line error if the rule's point mass is not positive definite (too few points
     to determine a spline of the basis)."""
     try:
-        BandedSPD(A, np.zeros(A.shape[0], dtype=bool))
+        pivots = BandedSPD(A, np.zeros(A.shape[0], dtype=bool)).factor[-1]
+        if np.min(pivots ** 2 / np.diag(A)) < DEFINITE_PIVOT:  # singular up to round-off
+            raise np.linalg.LinAlgError
     except np.linalg.LinAlgError:
         raise ValueError(f"quadrature rule {rule!r}: its points do not determine the basis "
                          f"(point mass not positive definite); choose a rule with more points") from None

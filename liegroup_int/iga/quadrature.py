@@ -138,13 +138,18 @@ def _gauss_spline_rule(space) -> PatchRule:
 def _auto_rule(space) -> PatchRule:
     """``gauss-spline`` for p = 3..7 where its iteration converges (p = 3..6 always), else
     ``gauss-p`` (at p = 2 gauss-spline is less accurate in the first modes; at p >= 8 its
-    iteration does not converge)."""
+    iteration does not converge); ``gauss`` on a patch of one or two knot intervals, where
+    those rules have fewer points than basis functions (a frame's short piece next to a
+    point load)."""
     if 3 <= space.degree <= 7:
         try:
-            return _spline_points(space)
+            rule = _spline_points(space)
+            if rule.u.size >= space.n_ctrl:
+                return rule
         except SplineQuadratureError:
             pass
-    return RULES["gauss-p"](space)._replace(name="gauss-p")
+    rule = RULES["gauss-p"](space)._replace(name="gauss-p")
+    return rule if rule.u.size >= space.n_ctrl else RULES["gauss"](space)._replace(name="gauss")
 
 
 #: The stiffness rule of the Galerkin beam unless one is chosen (``space.quadrature``).
@@ -171,7 +176,8 @@ RULE_DESCRIPTIONS = {
     "gauss-2": "2 Gauss points per knot interval for every term",
     "greville": "one point per control point (Greville abscissae), weights exact for the basis",
     "gauss-spline": "Gaussian rule of the products N_i' N_j (exact as gauss-p, about (p + 1) / 2 points per interval)",
-    "auto": "gauss-spline for p = 3..7 where it is found (p = 3..6 always), else gauss-p",
+    "auto": "gauss-spline for p = 3..7 where it is found (p = 3..6 always), else gauss-p; gauss on a patch "
+            "too short for either",
 }
 
 

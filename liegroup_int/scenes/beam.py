@@ -101,7 +101,7 @@ KEYS = {
             choices=("primal", "galerkin")),
         Key("space.quadrature", "str", DEFAULT_RULE,
             "quadrature rule of the galerkin stiffness (auto: gauss-spline for p = 3..7 where it is found, p = 3..6 "
-            "always, else gauss-p; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
+            "always, else gauss-p, and gauss on a piece of one or two knot intervals; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
             "(p + 1) / 2 points per knot interval; gauss-p: p Gauss points per knot interval; both integrate the "
             "straight beam's stiffness at rest exactly)",
             choices=tuple(RULES)),

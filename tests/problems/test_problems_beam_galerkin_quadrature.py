@@ -122,3 +122,35 @@ def test_backends_agree(scene, rule):
     ka, kb = a.increment_rate(0.1, y, u), b.increment_rate(0.1, y, u)
     scale = np.max(np.abs(ka), axis=(1, 2))
     assert np.all(np.max(np.abs(ka - kb), axis=(1, 2)) <= 1e-11 * scale)
+
+
+def _short_piece_frame(rule):
+    """Right-angle frame, p = 4, n_ctrl = 21 per leg, a point load at a fifth of the second
+    leg: the piece before it has p + 1 control values (one knot interval)."""
+    return load_scene("right_angle_cantilever", {
+        "space.quadrature": rule, "space.degree": 4, "space.n_ctrl": 21,
+        "point_loads": [{"s": 0.6, "force": [0.0, 0.0, 1.0]}]})
+
+
+def test_a_rule_with_fewer_points_than_a_patch_has_basis_functions_is_refused():
+    """gauss-p (and gauss-spline) put 4 points on the one-interval piece of 5 basis
+    functions: the point mass is singular, its last Cholesky pivot round-off of either
+    sign; the rule is refused in one line instead of projecting through it."""
+    with pytest.raises(ValueError, match="'gauss-p': its points do not determine the basis"):
+        problem(_short_piece_frame("gauss-p"))
+
+
+def test_auto_takes_gauss_on_a_one_interval_piece():
+    """``auto`` keeps the spline rule on the long pieces and takes ``gauss`` (p + 1 points
+    per interval) on the short one. The frame's spectrum at rest is imaginary (max Re below
+    1e-7 of |lambda|max, finite-difference noise) and its |lambda|max within 1 % of the
+    gauss rule's everywhere (the same bound as the straight pendulum's above)."""
+    lam = {}
+    for rule in ("auto", "gauss"):
+        pb = problem(_short_piece_frame(rule))
+        ev = eigenvalues(pb, 0.0, pb.initial_state())
+        lam[rule] = float(np.max(np.abs(ev)))
+        print(f"{rule}: rules {pb.gs.rules_used}, max Re {ev.real.max():.3g} 1/s, |lambda|max {lam[rule]:.6g}")
+        assert ev.real.max() <= 1e-7 * lam[rule]
+    assert set(problem(_short_piece_frame("auto")).gs.rules_used) == {"gauss", "gauss-spline"}
+    assert abs(lam["auto"] / lam["gauss"] - 1) < 1e-2
