@@ -358,7 +358,8 @@ def integrate_adaptive(
             if stopped:
                 break
         elif stepper is not None:  # every attempt up to ``stop`` in one compiled call
-            t, y = run.compiled(stepper, t, y, stop, stats)
+            res = run.compiled(stepper, t, y, stop, stats)
+            t, y = res.t, res.y
         else:
             t, y, stopped = run.generic(steps, t, y, stop)
             if stopped:
@@ -422,7 +423,7 @@ class _AdaptiveRun:
     def compiled(self, stepper, t: float, y, stop: float, stats: Stats, t_land: float | None = None):
         """Every attempt from ``(t, y)`` up to the first accepted step that ends at or after
         ``stop`` (landing on ``t_land``, default ``stop``) in one call of the compiled engine;
-        returns ``(t, y)``, the engine's :class:`AdaptiveAdvance` with ``t_land``."""
+        returns the engine's :class:`AdaptiveAdvance`."""
         c = self.ctl
         res = stepper.advance_to(t, y, stop, c.h, c.err_prev, c.rate, self.rtol, self.atol, self.h_max,
                                  self.max_steps - stats.steps, self.max_angle, self.gains, t_land, self.memory)
@@ -435,7 +436,7 @@ class _AdaptiveRun:
             raise StepSizeError(f"reached max_steps={self.max_steps} at t={res.t:.6g}", res.t, stats.steps)
         if res.status == "underflow":
             raise StepSizeError(f"step size underflow (h={c.h:.3g}) at t={res.t:.6g}", res.t, stats.steps)
-        return res if t_land is not None else (res.t, res.y)
+        return res
 
     def generic(self, steps: _GenericSteps, t: float, y, stop: float):
         """Attempts from ``(t, y)`` until a step lands on ``stop``: ``(t, y, stopped)``,
