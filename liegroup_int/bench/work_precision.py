@@ -466,88 +466,89 @@ def _coarse_reference(plan: Plan, disc: Callable, cached: Callable, ref: Run, lo
     return run
 
 
-def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", peer: bool = True,
-                   fresh: bool = False, log: Callable | None = print) -> Result:
-    """Run a plan (module doc). ``out/runs`` caches finished runs unless ``out`` is None."""
-    cache = None if out is None else Path(out) / "runs"
-    if fresh and cache is not None and cache.exists():
-        for f in cache.glob("*.npz"):
-            f.unlink()
-    built: dict[tuple[int, int, str], Discretized] = {}
+class _Bench:
+    """The state of one :func:`work_precision` run: the plan, the run cache, the built
+    discretizations, the references and our runs so far."""
 
-    def disc(p: int, n: int, form: str = "primal") -> Discretized:
-        if (p, n, form) not in built:
-            built[(p, n, form)] = d = prepare(plan.scene, p, n, plan.t_end, plan.every, backend, form)
-            _say(log, f"  p={p} n_ctrl={n} {form}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = "
-                      f"{d.max_real:.3g} 1/s, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
-        return built[(p, n, form)]
+    def __init__(self, plan: Plan, cache: Path | None, backend: str, log: Callable | None):
+        self.plan, self.cache, self.backend, self.log = plan, cache, backend, log
+        self.built: dict[tuple[int, int, str], Discretized] = {}
+        self.ours: dict[str, Run] = {}
 
-    def cached(key_parts, make: Callable[[], Run], tag: tuple = OURS_TAG) -> Run:
-        key = _key(plan.scene, plan.t_end, plan.every, backend, *key_parts, *tag)
-        hit = _load_cached(cache, key)
+    def disc(self, p: int, n: int, form: str = "primal") -> Discretized:
+        if (p, n, form) not in self.built:
+            plan = self.plan
+            self.built[(p, n, form)] = d = prepare(plan.scene, p, n, plan.t_end, plan.every, self.backend, form)
+            _say(self.log, f"  p={p} n_ctrl={n} {form}: |lambda|max = {d.lam_max:.4g} 1/s, max Re lambda = "
+                           f"{d.max_real:.3g} 1/s, {1e6 * d.stage_cost_s:.1f} us CPU per stage")
+        return self.built[(p, n, form)]
+
+    def cached(self, key_parts, make: Callable[[], Run], tag: tuple | None = None) -> Run:
+        """The run of ``key_parts`` (and ``tag``, default :data:`OURS_TAG` as it is now) from
+        the cache, or made and stored."""
+        tag = OURS_TAG if tag is None else tag
+        key = _key(self.plan.scene, self.plan.t_end, self.plan.every, self.backend, *key_parts, *tag)
+        hit = _load_cached(self.cache, key)
         if hit is not None:
             return hit
         run = make()
         if not run.status.startswith("skipped"):
-            _store(cache, key, run)
+            _store(self.cache, key, run)
         return run
 
-    # 1. reference (and checks of its space and time errors)
-    p_ref, n_ref = plan.reference
-    f_ref = plan.reference_formulation
-    res_ref = f"p{p_ref} n{n_ref}"
-    _say(log, f"reference: RKMK6, {f_ref} {res_ref}")
-    d_ref = disc(p_ref, n_ref, f_ref)
-    y_ref = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_ref.lam_max, plan.t_end).y)
-    dt_ref = fit_step(y_ref / d_ref.lam_max, plan.every)
-    # primal keys are those of the references cached before the formulation was a setting
-    ref_key = ("ref", p_ref, n_ref, dt_ref) if f_ref == "primal" else ("ref", f_ref, p_ref, n_ref, dt_ref)
-    ref = cached(ref_key, partial(run_fixed, d_ref, "rkmk6", dt_ref, plan.t_end, plan.every, res_ref))
-    ref.formulation = f_ref
-    if ref.status != "ok":
-        raise RuntimeError(f"bench {plan.scene}: the reference run failed: {ref.status}")
-    _say(log, _describe(ref))
-    coarse = _coarse_reference(plan, disc, cached, ref, log)
-    # a second 6th-order method (RKMK65, stable on the imaginary axis) at twice the step:
-    # its distance to the reference bounds the reference's time error (RKMK6 itself is
-    # weakly unstable, so doubling its step would measure its growth, not its accuracy)
-    dt_chk = fit_step(2 * dt_ref, plan.every)
-    chk_key = ("ref-check", "rkmk65", p_ref, n_ref, dt_chk) if f_ref == "primal" else \
-        ("ref-check", "rkmk65", f_ref, p_ref, n_ref, dt_chk)
-    check = cached(chk_key, partial(run_fixed, d_ref, "rkmk65", dt_chk, plan.t_end, plan.every, res_ref))
-    check.formulation = f_ref
-    check.error = tip_error(check, ref)
-    _say(log, "  time-error bound of the reference (RKMK65 at 2 dt): " + _describe(check))
+    def _rkmk6_reference(self, d: Discretized, p: int, n: int, form: str, key_parts: tuple) -> Run:
+        """RKMK6 on ``d`` at the plan's reference step fraction (its key: ``key_parts`` and the step)."""
+        plan, res = self.plan, f"p{p} n{n}"
+        y = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d.lam_max, plan.t_end).y)
+        dt = fit_step(y / d.lam_max, plan.every)
+        run = self.cached((*key_parts, dt), partial(run_fixed, d, "rkmk6", dt, plan.t_end, plan.every, res))
+        run.formulation = form
+        if run.status != "ok":
+            raise RuntimeError(f"bench {plan.scene}: the reference run ({res}) failed: {run.status}")
+        return run
 
-    # 2. ours: every method at its stable step on every discretization and formulation, and
-    #    the time study (primal)
-    p_t, n_t = plan.time_study
-    res_t = f"p{p_t} n{n_t}"
-    d_t = disc(p_t, n_t)
-    y_t = min(plan.reference_y, stable_step(resolve_method("rkmk6"), d_t.lam_max, plan.t_end).y)
-    dt_t = fit_step(y_t / d_t.lam_max, plan.every)
-    tref = cached(("ref", p_t, n_t, dt_t), partial(run_fixed, d_t, "rkmk6", dt_t, plan.t_end, plan.every, res_t))
-    tref.formulation = "primal"
-    if tref.status != "ok":
-        raise RuntimeError(f"bench {plan.scene}: the time-study reference ({res_t}) failed: {tref.status}")
-    tref.error = tip_error(tref, ref)
-    _say(log, "time-study reference: " + _describe(tref))
-    ours: dict[str, Run] = {}
+    def references(self) -> None:
+        """The reference, the bounds on its space and time errors, and the time study's reference."""
+        plan, log = self.plan, self.log
+        (p_ref, n_ref), f_ref = plan.reference, plan.reference_formulation
+        _say(log, f"reference: RKMK6, {f_ref} p{p_ref} n{n_ref}")
+        d_ref = self.disc(p_ref, n_ref, f_ref)
+        # primal keys are those of the references cached before the formulation was a setting
+        key = ("ref", p_ref, n_ref) if f_ref == "primal" else ("ref", f_ref, p_ref, n_ref)
+        self.ref = ref = self._rkmk6_reference(d_ref, p_ref, n_ref, f_ref, key)
+        _say(log, _describe(ref))
+        self.coarse = _coarse_reference(plan, self.disc, self.cached, ref, log)
+        # a second 6th-order method (RKMK65, stable on the imaginary axis) at twice the step:
+        # its distance to the reference bounds the reference's time error (RKMK6 itself is
+        # weakly unstable, so doubling its step would measure its growth, not its accuracy)
+        dt_chk = fit_step(2 * ref.dt, plan.every)
+        chk_key = ("ref-check", "rkmk65", p_ref, n_ref, dt_chk) if f_ref == "primal" else \
+            ("ref-check", "rkmk65", f_ref, p_ref, n_ref, dt_chk)
+        self.check = check = self.cached(chk_key, partial(run_fixed, d_ref, "rkmk65", dt_chk, plan.t_end, plan.every,
+                                                          f"p{p_ref} n{n_ref}"))
+        check.formulation = f_ref
+        check.error = tip_error(check, ref)
+        _say(log, "  time-error bound of the reference (RKMK65 at 2 dt): " + _describe(check))
+        p_t, n_t = plan.time_study
+        self.tref = tref = self._rkmk6_reference(self.disc(p_t, n_t), p_t, n_t, "primal", ("ref", p_t, n_t))
+        tref.error = tip_error(tref, ref)
+        _say(log, "time-study reference: " + _describe(tref))
 
-    def add(key_parts, d: Discretized, make: Callable[[], Run], timed: bool) -> None:
+    def add(self, key_parts, d: Discretized, make: Callable[[], Run], timed: bool) -> None:
         k = _key(*key_parts)
-        if k in ours:
+        if k in self.ours:
             return
-        r = cached(key_parts, make)
+        r = self.cached(key_parts, make)
         r.formulation, r.kelvin_voigt = d.formulation, d.tau  # runs cached before formulations had none
-        r.error = tip_error(r, ref)
+        r.error = tip_error(r, self.ref)
         if timed:
-            r.time_error = tip_error(r, tref)
-        ours[k] = r
-        _say(log, _describe(r))
+            r.time_error = tip_error(r, self.tref)
+        self.ours[k] = r
+        _say(self.log, _describe(r))
 
-    def fixed(p: int, n: int, form: str, fractions, timed: bool) -> None:
-        d, res = disc(p, n, form), f"p{p} n{n}"
+    def fixed(self, p: int, n: int, form: str, fractions, timed: bool) -> None:
+        plan = self.plan
+        d, res = self.disc(p, n, form), f"p{p} n{n}"
         for m in plan.methods:
             if m in COMPOSITIONS and not hasattr(d.problem, "split_steps"):
                 continue  # splitting methods: the Galerkin form's kick-drift-kick only
@@ -557,31 +558,48 @@ def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", 
                 dt = fit_step(f * dt_stable, plan.every)
                 # primal keys are those of the runs cached before formulations were an axis
                 key = (m, p, n, dt) if form == "primal" else (m, form, p, n, dt, d.tau)
-                add(key, d, partial(run_fixed, d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
+                self.add(key, d, partial(run_fixed, d, m, dt, plan.t_end, plan.every, res, plan.budget_s), timed)
 
-    def time_study() -> None:
-        fixed(p_t, n_t, "primal", tuple(plan.dt_fractions), True)
+    def time_study(self) -> None:
+        plan = self.plan
+        (p_t, n_t), res_t = plan.time_study, "p{} n{}".format(*plan.time_study)
+        d_t = self.disc(p_t, n_t)
+        self.fixed(p_t, n_t, "primal", tuple(plan.dt_fractions), True)
         for m in plan.adaptive:
             h_max = stable_step(resolve_method(m), d_t.lam_max, plan.t_end).dt
             for rtol in plan.rtols:
-                add((m, "adaptive", p_t, n_t, rtol, h_max), d_t,
-                    partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
+                self.add((m, "adaptive", p_t, n_t, rtol, h_max), d_t,
+                         partial(run_adaptive, d_t, m, rtol, h_max, plan.t_end, plan.every, res_t, plan.budget_s), True)
 
-    for form in plan.formulations:
-        for p, n in plan.discretizations:
-            if not (form == "primal" and (p, n) == (p_t, n_t)):
-                fixed(p, n, form, (1.0,), False)
-        if form == "primal":
-            time_study()
-    if "primal" not in plan.formulations:
-        time_study()
+    def our_runs(self) -> None:
+        """Every method at its stable step on every discretization and formulation, and the
+        time study (primal)."""
+        plan = self.plan
+        for form in plan.formulations:
+            for p, n in plan.discretizations:
+                if not (form == "primal" and (p, n) == tuple(plan.time_study)):
+                    self.fixed(p, n, form, (1.0,), False)
+            if form == "primal":
+                self.time_study()
+        if "primal" not in plan.formulations:
+            self.time_study()
 
-    # 3. peer
-    peers, version, note = _peer_runs(plan, cached, ref, log) if peer and plan.peer_elements else ([], None, None)
-    lam = {f"p{p} n{n} {form}": (d.lam_max, d.max_real, d.tau) for (p, n, form), d in built.items()}
-    mine = list(ours.values())
-    bound = _bound(coarse, check)
-    return Result(plan, ref, check, tref, mine, peers, ratios(mine, peers, bound), lam, version, note, coarse)
+
+def work_precision(plan: Plan, out: Path | None = None, backend: str = "numba", peer: bool = True,
+                   fresh: bool = False, log: Callable | None = print) -> Result:
+    """Run a plan (module doc). ``out/runs`` caches finished runs unless ``out`` is None."""
+    cache = None if out is None else Path(out) / "runs"
+    if fresh and cache is not None and cache.exists():
+        for f in cache.glob("*.npz"):
+            f.unlink()
+    b = _Bench(plan, cache, backend, log)
+    b.references()
+    b.our_runs()
+    peers, version, note = _peer_runs(plan, b.cached, b.ref, log) if peer and plan.peer_elements else ([], None, None)
+    lam = {f"p{p} n{n} {form}": (d.lam_max, d.max_real, d.tau) for (p, n, form), d in b.built.items()}
+    mine = list(b.ours.values())
+    return Result(plan, b.ref, b.check, b.tref, mine, peers, ratios(mine, peers, _bound(b.coarse, b.check)), lam,
+                  version, note, b.coarse)
 
 
 # ----------------------------------------------------------------------------- reporting
