@@ -97,80 +97,99 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+class _Expected(Exception):
+    """What a value of a key's kind should have been (the end of :func:`coerce`'s line)."""
+
+
+def _unit(key: Key) -> str:
+    return f" [{key.unit}]" if key.unit else ""
+
+
+def _as_float(value, expected: str) -> float:
+    if not _is_number(value):
+        raise _Expected(expected)
+    return float(value)
+
+
+def _float_or_auto(key: Key, value):
+    if value in ("auto", "none"):
+        return None if value == "none" else value
+    return _as_float(value, 'a finite number, "auto", or "none" (adaptive stepping with rtol/atol)')
+
+
+def _of_type(test, expected: str):
+    def check(key: Key, value):
+        if not test(value):
+            raise _Expected(expected)
+        return value
+    return check
+
+
+def _str(key: Key, value):
+    if not isinstance(value, str):
+        raise _Expected("a string")
+    if key.choices is not None and value not in key.choices:
+        raise _Expected("one of " + ", ".join(repr(c) for c in key.choices))
+    return value
+
+
+def _numbers(value, n: int | None, expected: str) -> tuple:
+    if not (isinstance(value, list) and value and (n is None or len(value) == n) and all(map(_is_number, value))):
+        raise _Expected(expected)
+    return tuple(float(x) for x in value)
+
+
+def _strs(key: Key, value):
+    if not (isinstance(value, list) and all(isinstance(x, str) for x in value)):
+        raise _Expected("a list of strings")
+    if key.choices is not None and any(x not in key.choices for x in value):
+        raise _Expected("names among " + ", ".join(key.choices))
+    return tuple(value)
+
+
+def _tables(key: Key, value):
+    if not (isinstance(value, list) and all(isinstance(x, Mapping) for x in value)):
+        raise _Expected("an array of tables ([[" + key.name + "]] entries)")
+    return tuple(dict(x) for x in value)
+
+
+def _table(key: Key, value):
+    if not (isinstance(value, list) and len(value) >= 2 and all(
+            isinstance(r, list) and len(r) == 2 and all(_is_number(x) for x in r) for r in value)):
+        raise _Expected("a list of at least two [t, value] pairs")
+    pairs = tuple((float(a), float(b)) for a, b in value)
+    if any(b[0] <= a[0] for a, b in zip(pairs, pairs[1:])):
+        raise _Expected("[t, value] pairs with strictly increasing t")
+    return pairs
+
+
+#: The converter of each key kind: ``(key, value) -> clean value``, or raises :class:`_Expected`.
+_KINDS: dict[str, Callable] = {
+    "float": lambda key, v: _as_float(v, "a finite number" + _unit(key)),
+    "float_or_auto": _float_or_auto,
+    "number_or_auto": lambda key, v: v if v == "auto" else _as_float(v, "a finite number" + _unit(key)
+                                                                      + ' or "auto"'),
+    "int": _of_type(lambda v: isinstance(v, int) and not isinstance(v, bool), "an integer"),
+    "bool": _of_type(lambda v: isinstance(v, bool), "true or false"),
+    "str": _str,
+    "vec3": lambda key, v: _numbers(v, 3, "a list of 3 numbers"),
+    "floats": lambda key, v: _numbers(v, None, "a non-empty list of numbers"),
+    "strs": _strs,
+    "tables": _tables,
+    "table": _table,
+}
+
+
 def coerce(key: Key, value, where: str):
     """Check ``value`` against ``key.kind`` (and ``key.check``); return the clean value."""
-
-    raw = value
-
-    def fail(expected: str):
-        raise SceneError(f"{where}: key '{key.name}' = {raw!r}: expected {expected}")
-
-    k = key.kind
-    if k == "float":
-        if not _is_number(value):
-            fail("a finite number" + (f" [{key.unit}]" if key.unit else ""))
-        value = float(value)
-    elif k == "float_or_auto":
-        if value == "auto":
-            return value
-        if value == "none":
-            return None
-        if not _is_number(value):
-            fail('a finite number, "auto", or "none" (adaptive stepping with rtol/atol)')
-        value = float(value)
-    elif k == "number_or_auto":
-        if value == "auto":
-            return value
-        if not _is_number(value):
-            fail('a finite number' + (f" [{key.unit}]" if key.unit else "") + ' or "auto"')
-        value = float(value)
-    elif k == "int":
-        if isinstance(value, bool) or not isinstance(value, int):
-            fail("an integer")
-    elif k == "bool":
-        if not isinstance(value, bool):
-            fail("true or false")
-    elif k == "str":
-        if not isinstance(value, str):
-            fail("a string")
-        if key.choices is not None and value not in key.choices:
-            fail("one of " + ", ".join(repr(c) for c in key.choices))
-    elif k == "vec3":
-        if not (isinstance(value, list) and len(value) == 3 and all(_is_number(x) for x in value)):
-            fail("a list of 3 numbers")
-        value = tuple(float(x) for x in value)
-    elif k == "floats":
-        if not (isinstance(value, list) and value and all(_is_number(x) for x in value)):
-            fail("a non-empty list of numbers")
-        value = tuple(float(x) for x in value)
-    elif k == "strs":
-        if not (isinstance(value, list) and all(isinstance(x, str) for x in value)):
-            fail("a list of strings")
-        if key.choices is not None:
-            bad = [x for x in value if x not in key.choices]
-            if bad:
-                fail("names among " + ", ".join(key.choices))
-        value = tuple(value)
-    elif k == "tables":
-        if not (isinstance(value, list) and all(isinstance(x, Mapping) for x in value)):
-            fail("an array of tables ([[" + key.name + "]] entries)")
-        value = tuple(dict(x) for x in value)
-    elif k == "table":
-        ok = isinstance(value, list) and len(value) >= 2 and all(
-            isinstance(r, list) and len(r) == 2 and all(_is_number(x) for x in r) for r in value
-        )
-        if not ok:
-            fail("a list of at least two [t, value] pairs")
-        value = tuple((float(a), float(b)) for a, b in value)
-        if any(b[0] <= a[0] for a, b in zip(value, value[1:])):
-            fail("[t, value] pairs with strictly increasing t")
-    else:  # pragma: no cover - schema bug
-        raise AssertionError(f"unknown key kind {k!r}")
-    if key.check is not None and value != "auto":
-        msg = key.check(value)
+    try:
+        clean = _KINDS[key.kind](key, value)
+        msg = key.check(clean) if key.check is not None and clean not in ("auto", None) else ""
         if msg:
-            fail(msg)
-    return value
+            raise _Expected(msg)
+    except _Expected as exc:
+        raise SceneError(f"{where}: key '{key.name}' = {value!r}: expected {exc}") from None
+    return clean
 
 
 #: Byte-order marks of encodings other than UTF-8, which a scene file cannot use.
