@@ -185,17 +185,38 @@ class GalerkinBeamProblem(BeamBase):
         self.integration = integration
         self.quadrature = quadrature
         self.gs = GalerkinSpace(space, rule="gauss-full" if integration == "full" else quadrature)
-        gs = self.gs
-        self.n, self.m = gs.n, gs.m
+        self.n, self.m = self.gs.n, self.gs.m
+        self._section_fields(space, constants)
+        g = np.asarray(loads.gravity, float)
+        self._distributed_loads(loads, g)
+        self.bodies = self._bodies(bodies, g)
+        self._supports(bcs, loads)
+        self.joints = self._joints(space, loads)
+        #: ``(row, point, EndLoad)`` of every loaded end and joint
+        self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
+            (j.a, j.point, j.load) for j in self.joints if j.load is not None)
+        self._masses()
+        self._constraints = self._joint_constraints()
+        self.hinges = self._hinges(space)
+        self.quad = self.gs.w_full
+        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
+                                   or self.translating_ends or self.point_loads
+                                   or any(h.damping > 0.0 for h in self.hinges))
+
+    def _section_fields(self, space, constants) -> None:
+        """The section stiffnesses and inertias at the points, and the point bases."""
+        gs, pp = self.gs, self.gs.point_patch
         sections = self._sections(space, constants)
-        pp = gs.point_patch
         self.CN = np.array([sec.CN for sec in sections], dtype=float)[pp]
         self.CM = np.array([sec.CM for sec in sections], dtype=float)[pp]
         self.Jm = np.array([sec.Jm for sec in sections], dtype=float)[pp]
         self.mu = np.array([sec.mu for sec in sections], dtype=float)[pp]
         self.B0, self.B1 = gs.B0, gs.B1
         self.wf, self.wa = gs.w_full, gs.w_axial
-        g = np.asarray(loads.gravity, float)
+
+    def _distributed_loads(self, loads: Loads, g: np.ndarray) -> None:
+        """The distributed force (gravity included) and couple, and the momentum weights."""
+        gs = self.gs
         self.has_q = bool(np.any(loads.distributed_force) or np.any(g))
         q_pt = np.asarray(loads.distributed_force, float) + self.mu[:, None] * g
         #: ``int N_i q ds`` (gravity included), ``(n, 3)``, times the distributed profile
@@ -204,39 +225,36 @@ class GalerkinBeamProblem(BeamBase):
         self.has_m = bool(np.any(self.m_dist))
         #: ``int mu N_i ds``, ``(n,)``: the linear momentum is ``mass_weights @ v``
         self.mass_weights = gs.weighted_mass(self.mu).sum(axis=0)
+
+    def _supports(self, bcs: BoundaryConditions, loads: Loads) -> None:
+        """The two ends, the rollers, and the rows with fixed positions and rotations."""
         n, m = self.n, self.m
-        self.bodies = self._bodies(bodies, g)
         self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
                      self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
         self.translating_ends = tuple(e for e in self.ends if e.translation is not None)
-        self.joints = self._joints(space, loads)
-        #: ``(row, point, EndLoad)`` of every loaded end and joint
-        self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
-            (j.a, j.point, j.load) for j in self.joints if j.load is not None)
         #: ``(row, axis)`` of each roller end: its free position component (static analyses)
-        self.rollers = tuple(self._roller(e, kind, gs) for e, kind in zip(self.ends, (bcs.start, bcs.end))
+        self.rollers = tuple(self._roller(e, kind, self.gs) for e, kind in zip(self.ends, (bcs.start, bcs.end))
                              if kind == "roller")
         fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
         for e in self.ends:
             fixp[e.index] |= e.fix_position
             fixr[e.index] |= e.fix_rotation
         self.fix_position, self.fix_rotation = fixp, fixr
+
+    def _masses(self) -> None:
+        """The consistent mass matrices (the end bodies' mass and inertia on their rows),
+        factored with the supports' rows fixed."""
+        gs = self.gs
         self._M_mu = gs.weighted_mass(self.mu)
         self._M_J = tuple(gs.weighted_mass(self.Jm[:, d]) for d in range(3))
         for row, _, body in self.bodies:
             self._M_mu[row, row] += body.mass
             for d in range(3):
                 self._M_J[d][row, row] += body.inertia[d]
-        self.mass_position = BandedSPD(self._M_mu, fixp)
-        self.mass_theta = BandedSPD(gs.point_mass, fixr)
-        self.mass_rotation = tuple(BandedSPD(M, fixr) for M in self._M_J)
-        self._constraints = self._joint_constraints()
-        self.hinges = self._hinges(space)
-        self.quad = gs.w_full
-        self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
-                                   or self.translating_ends or self.point_loads
-                                   or any(h.damping > 0.0 for h in self.hinges))
+        self.mass_position = BandedSPD(self._M_mu, self.fix_position)
+        self.mass_theta = BandedSPD(gs.point_mass, self.fix_rotation)
+        self.mass_rotation = tuple(BandedSPD(M, self.fix_rotation) for M in self._M_J)
 
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
         """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
