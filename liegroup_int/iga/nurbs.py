@@ -318,12 +318,15 @@ def _bezier_elevation_coefficients(p: int, t: int) -> np.ndarray:
 
 
 def _elevate_homogeneous(knots: np.ndarray, p: int, pw: np.ndarray, t: int):
-    """Piegl & Tiller A5.9 (DegreeElevateCurve) in homogeneous coordinates.
+    """Degree elevation by ``t`` in homogeneous coordinates: every distinct knot's
+    multiplicity grows by ``t``, and the control points of the same curve in that space
+    solve the interpolation at its Greville abscissae (the curve lies in the elevated space,
+    and Greville abscissae satisfy the Schoenberg-Whitney conditions, so the system is
+    nonsingular and its solution exact up to round-off).
 
     Parameters
     ----------
     knots : numpy.ndarray, shape (n + p + 2,)
-        Knot vector ``U[0..m]`` with ``m = n + p + 1``.
     p : int
         Degree.
     pw : numpy.ndarray, shape (n + 1, d)
@@ -333,108 +336,18 @@ def _elevate_homogeneous(knots: np.ndarray, p: int, pw: np.ndarray, t: int):
 
     Returns
     -------
-    (uh, qw) : new knot vector and control points of degree ``p + t``.
+    (numpy.ndarray, numpy.ndarray)
+        The elevated knot vector and homogeneous control points.
     """
-    n = pw.shape[0] - 1
-    dim = pw.shape[1]
-    m = n + p + 1
-    ph = p + t
-    n_interior = np.unique(knots[p + 1: m - p]).size
-    n_new = n + 1 + t * (n_interior + 1)
-    bezalfs = _bezier_elevation_coefficients(p, t)
-
-    qw = np.zeros((n_new, dim))
-    uh = np.zeros(n_new + ph + 1)
-    bpts = np.zeros((p + 1, dim))
-    ebpts = np.zeros((ph + 1, dim))
-    next_bpts = np.zeros((max(p - 1, 1), dim))
-    alfs = np.zeros(max(p - 1, 1))
-
-    mh = ph
-    kind = ph + 1
-    r = -1
-    a = p
-    b = p + 1
-    cind = 1
-    ua = knots[0]
-    qw[0] = pw[0]
-    uh[: ph + 1] = ua
-    bpts[:] = pw[: p + 1]
-    while b < m:
-        i = b
-        while b < m and knots[b] == knots[b + 1]:
-            b += 1
-        mul = b - i + 1
-        mh = mh + mul + t
-        ub = knots[b]
-        oldr = r
-        r = p - mul
-        lbz = (oldr + 2) // 2 if oldr > 0 else 1
-        rbz = ph - (r + 1) // 2 if r > 0 else ph
-        if r > 0:
-            # insert ub r times to obtain the Bezier segment [ua, ub]
-            numer = ub - ua
-            for k in range(p, mul, -1):
-                alfs[k - mul - 1] = numer / (knots[a + k] - ua)
-            for j in range(1, r + 1):
-                save = r - j
-                s = mul + j
-                for k in range(p, s - 1, -1):
-                    bpts[k] = alfs[k - s] * bpts[k] + (1.0 - alfs[k - s]) * bpts[k - 1]
-                next_bpts[save] = bpts[p]
-        # degree-elevate the Bezier segment
-        for i in range(lbz, ph + 1):
-            ebpts[i] = bezalfs[i, max(0, i - t): min(p, i) + 1] @ bpts[max(0, i - t): min(p, i) + 1]
-        if oldr > 1:
-            # remove the knot ua oldr times
-            first = kind - 2
-            last = kind
-            den = ub - ua
-            bet = (ub - uh[kind - 1]) / den
-            for tr in range(1, oldr):
-                i = first
-                j = last
-                kj = j - kind + 1
-                while j - i > tr:
-                    if i < cind:
-                        alf = (ub - uh[i]) / (ua - uh[i])
-                        qw[i] = alf * qw[i] + (1.0 - alf) * qw[i - 1]
-                    if j >= lbz:
-                        if j - tr <= kind - ph + oldr:
-                            gam = (ub - uh[j - tr]) / den
-                            ebpts[kj] = gam * ebpts[kj] + (1.0 - gam) * ebpts[kj + 1]
-                        else:
-                            ebpts[kj] = bet * ebpts[kj] + (1.0 - bet) * ebpts[kj + 1]
-                    i += 1
-                    j -= 1
-                    kj -= 1
-                first -= 1
-                last += 1
-        if a != p:
-            # load the knot ua
-            for _ in range(ph - oldr):
-                uh[kind] = ua
-                kind += 1
-        for j in range(lbz, rbz + 1):
-            qw[cind] = ebpts[j]
-            cind += 1
-        if b < m:
-            # set up for the next pass
-            bpts[:r] = next_bpts[:r]
-            bpts[r:] = pw[b - p + r: b + 1]
-            a = b
-            b += 1
-            ua = ub
-        else:
-            uh[kind: kind + ph + 1] = ub
-    nh = mh - ph - 1
-    if nh + 1 != n_new or cind != n_new:
-        raise RuntimeError("degree elevation bookkeeping mismatch")  # pragma: no cover
-    return uh, qw
+    values, counts = np.unique(knots, return_counts=True)
+    uh = np.repeat(values, counts + t)
+    x = greville(uh, p + t)
+    rhs = basis_derivatives(knots, p, x)[0] @ pw
+    return uh, np.linalg.solve(basis_derivatives(uh, p + t, x)[0], rhs)
 
 
 def elevate_degree(curve: NurbsCurve, new_degree: int) -> NurbsCurve:
-    """Exact degree elevation (Piegl & Tiller A5.9).
+    """Exact degree elevation (the same curve in the space of degree ``new_degree``).
 
     Every distinct knot's multiplicity grows by ``new_degree - degree``.
 
