@@ -157,6 +157,8 @@ def unpack_as(cls, flat, head):
 
 @overload(unpack_as)
 def _unpack_as(cls, flat, head):
+    """Compiled :func:`unpack_as`: the reader calls of ``cls``'s fields written out once per
+    NamedTuple class (numba types the class's fields from them)."""
     pycls = cls.instance_class
     args = ", ".join(f"{r}(flat, head, {k})" for k, r in enumerate(field_readers(pycls)))
     scope = dict(_READERS, _cls=pycls)
