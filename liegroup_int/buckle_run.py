@@ -110,7 +110,8 @@ def _print(scene: Scene, s: dict, out: Path) -> None:
         crit = "; ".join(f"{k} = ({', '.join(f'{x:.6g}' for x in v)})" for k, v in r["critical_loads"].items())
         print(f"{r['mode']:>4}  {r['load_factor']:14.8g}  {r['load_factor_linear']:14.8g}  {r['dominant']:>8}  {crit}")
     if s["refine"] and s["modes"]:
-        print(f"modes 2.. from the linearization about the equilibrium at load factor {s['at_load_factor']:.8g}")
+        print(f"modes 2.. from the tangent's secant between the reference and the equilibrium at load factor "
+              f"{s['at_load_factor']:.8g}")
     print(f"-> {out} (buckle.csv, summary.json, buckle.png, mode_XX.vtu, modes.pvd)")
 
 

@@ -73,6 +73,30 @@ def test_euler_load_of_the_clamped_free_column():
     assert res.load_factors[1:] * LOAD == pytest.approx([haringx(euler(EI2)), haringx(euler(EI1, 2))], rel=1e-4)
 
 
+def portal_sway_root() -> float:
+    """``k h`` of the fixed-base portal's sway buckling with equal I and h = L:
+    tan(k h) = -k h / 6 on (pi / 2, pi) (``portal.toml``)."""
+    return scipy.optimize.brentq(lambda x: np.tan(x) + x / 6.0, np.pi / 2 + 1e-9, np.pi - 1e-9)
+
+
+def test_portal_frame_buckles_out_of_plane_then_sways_in_plane():
+    """The built-in portal frame (three members joined rigidly, fixed feet, P = 1 on each
+    top corner, EI = 1, h = L = 1, p = 4, n_ctrl = 21 per member): the refined lowest
+    factor is the out-of-plane cantilever load pi^2 / 4 (both columns sway alike, the beam
+    turns without twisting) and the in-plane sway factor is (k h)^2 with
+    tan(k h) = -k h / 6 (Timoshenko & Gere's fixed-base portal), 7.379154; measured
+    -1.6e-7 and -3.4e-7 (the axial and shear corrections are below 1e-6, EA = GA = 1e7);
+    asserted to 1e-5. The sway mode is the first one whose largest displacement lies in
+    the frame's plane (the mode between, 7.0915, is the antisymmetric out-of-plane one, in
+    which the beam twists)."""
+    res = buckling_loads(problem(load_scene("portal")), 3, t=0.05)
+    assert res.refined
+    assert res.load_factors[0] == pytest.approx(np.pi**2 / 4, rel=1e-5)
+    in_plane = [k for k, v in enumerate(res.vectors) if np.abs(v[0, :, :2]).max() > np.abs(v[0, :, 2]).max()]
+    print(f"factors {res.load_factors}, in-plane modes {in_plane}")
+    assert in_plane and res.load_factors[in_plane[0]] == pytest.approx(portal_sway_root() ** 2, rel=1e-5)
+
+
 def test_buckling_load_converges_with_the_mesh():
     """Coarse mesh: n_ctrl = 11 is 3.1e-7 above the exact load (measured), n_ctrl = 21
     within 1e-8 of it: refining brings the factor to the formula."""
