@@ -138,8 +138,11 @@ KEYS = {
         Key("section.rhoI2", "float", None, "rotational inertia per length about d2 (explicit)", "kg m", positive),
         Key("section.rhoJ", "float", None, "polar inertia per length (explicit; default rhoI1 + rhoI2)", "kg m", positive),
         Key("bc.start", "str", "clamped", "end condition at s = 0 (roller: slides along its tangent, a coordinate "
-            "axis, without twisting; static and buckle only)", choices=END_TYPES),
+            "axis, without twisting; pinned: held, turning about bc.pin_axis only; both static and buckle only)",
+            choices=END_TYPES),
         Key("bc.end", "str", "free", "end condition at s = L (as bc.start)", choices=END_TYPES),
+        Key("bc.pin_axis", "vec3", [0.0, 0.0, 1.0], "axis a pinned end turns about (along an axis of its section: "
+            "the normal of a frame's plane)"),
         Key("loads.gravity", "vec3", ZERO, "gravitational acceleration (adds rho A g per length)", "m/s^2"),
         Key("loads.distributed_force", "vec3", ZERO, "force per length, spatial", "N/m"),
         Key("loads.distributed_couple", "vec3", ZERO, "couple per length, spatial", "N m/m"),
@@ -664,8 +667,10 @@ def _undamped(scene: Scene) -> BeamProblem:
                   end=_end_load(scene, "end"), joints=joint_loads)
     try:
         bcs = BoundaryConditions(scene["bc.start"], scene["bc.end"], _motion(scene, "start"), _motion(scene, "end"),
-                                 _translation(scene, "start"), _translation(scene, "end"))
+                                 _translation(scene, "start"), _translation(scene, "end"), scene["bc.pin_axis"])
     except ParameterError as exc:
+        if exc.field == "pin_axis":
+            raise SceneError(f"{scene.source}: key 'bc.pin_axis': {exc.reason}") from None
         end = "start" if exc.field.startswith("start") else "end"
         table = "translation" if exc.field.endswith("translation") else "motion"
         raise SceneError(f"{scene.source}: key '{table}.{end}.kind': {exc.reason}") from None
@@ -979,9 +984,10 @@ def _quadrature_used(pb) -> dict:
 
 def build(scene: Scene) -> Simulation:
     pb = problem(scene, size_damping=True)
-    if getattr(pb, "rollers", ()):
-        raise SceneError(f"{scene.source}: key 'bc.{'start' if scene['bc.start'] == 'roller' else 'end'}' = "
-                         "'roller' is for `liegroup-int static` and `buckle`; use hinged or clamped ends to run")
+    if getattr(pb, "rollers", ()) or getattr(pb, "pins", ()):
+        end = "start" if scene["bc.start"] in ("roller", "pinned") else "end"
+        raise SceneError(f"{scene.source}: key 'bc.{end}' = '{scene[f'bc.{end}']}' is for `liegroup-int static` "
+                         "and `buckle`; use hinged or clamped ends to run")
     y0, static = (pb.initial_state(), {}) if scene["initial.state"] == "reference" else _static_start(scene, pb)
 
     def final_state(y):

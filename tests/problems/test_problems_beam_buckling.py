@@ -330,3 +330,49 @@ def test_pinned_pinned_reactions_balance_the_loads(tmp_path):
     print(start, end, start + end + applied)
     assert np.all(np.abs(start + end + applied) < 1e-8)
     assert end[2] == 0.0 and start[0] == pytest.approx(end[0], rel=1e-6)
+
+
+def test_pinned_portal_sways_at_the_classical_load():
+    """The portal on pins about z (``bc.start = bc.end = "pinned"``: the feet hold their
+    position and turn about the frame's normal only): the sway mode comes first, at
+    (k h)^2 with k h tan(k h) = 6 (the beam holds the tops with 6 EI / L, the feet are
+    free to turn): 1.8212928. The linear factor (secant over the first load step; the
+    prebuckling state is a pure compression) measured -1.9e-6, asserted to 1e-5; the next
+    one is the out-of-plane pi^2 / 4 (the pins hold the feet against turning out of the
+    plane), measured -1.6e-7."""
+    pb = problem(load_scene("portal", {"bc.start": "pinned", "bc.end": "pinned", "integrator.backend": "numpy"}))
+    assert [comp for _, comp in pb.pins] and len(pb.pins) == 2
+    res = buckling_loads(pb, 2, t=0.05, refine=False)
+    kh = scipy.optimize.brentq(lambda x: x * np.tan(x) - 6.0, 1e-6, np.pi / 2 - 1e-9)
+    print(f"linear factors {res.linear}, sway formula {kh**2:.8g}")
+    assert res.linear[0] == pytest.approx(kh**2, rel=1e-5)
+    assert res.linear[1] == pytest.approx(np.pi**2 / 4, rel=1e-5)
+
+
+def test_pinned_feet_take_the_loads_and_no_couple_about_the_pin():
+    """Static equilibrium of the pinned portal under a sideways force of 0.1 on the left
+    corner as well (solved to a residual of 1e-11 of the load): the feet's reactions
+    balance the applied forces to 4.6e-8 along x and 1.1e-9 along y (asserted: 2e-7, 1e-7
+    of the total load; the same frame on clamped feet balances to 6.6e-8 along x, so the
+    gap is the frame's joints', not the pins'), and no pin takes a couple about its axis.
+    An axis that is not an axis of the end section is refused."""
+    from liegroup_int.problems.beam.statics import solve_static
+
+    pb = problem(load_scene("portal", {"bc.start": "pinned", "bc.end": "pinned", "integrator.backend": "numpy",
+                                       "point_loads": [{"s": 1 / 3, "force": [0.1, -1.0, 0.0]},
+                                                       {"s": 2 / 3, "force": [0.0, -1.0, 0.0]}]}))
+    st = solve_static(pb, load_steps=2, t=0.05, tol=1e-11)
+    reac = pb.reactions(st.state, 0.05)
+    total = sum(f for f, _ in reac.values())
+    print(f"reactions {reac}, sum {total}")
+    assert np.allclose(total, [-0.1, 2.0, 0.0], rtol=0.0, atol=2e-7)
+    for f, c in reac.values():
+        assert abs(c[2]) < 1e-12
+    with pytest.raises(ValueError, match="bc.pin_axis"):
+        problem(load_scene("portal", {"bc.start": "pinned", "bc.pin_axis": [1.0, 1.0, 0.0]}))
+
+
+def test_pinned_and_roller_ends_refuse_a_run(capsys):
+    assert main(["run", "portal", "--set", "bc.start=pinned", "--out", "unused"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'pinned' is for `liegroup-int static`" in err[0]

@@ -119,8 +119,8 @@ class BeamBase(Problem):
         where = "start" if normal < 0 else "end"
         if kind == "clamped" and load.active:
             raise ValueError(f"loads.{where}: a load on a clamped end does no work; remove it or free the end")
-        if kind == "hinged" and np.any(load.force):
-            raise ValueError(f"loads.{where}.force: a force on a hinged end is taken by the support; remove it "
+        if kind in ("hinged", "pinned") and np.any(load.force):
+            raise ValueError(f"loads.{where}.force: a force on a {kind} end is taken by the support; remove it "
                              "or free the end")
 
     @staticmethod

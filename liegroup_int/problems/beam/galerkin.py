@@ -236,6 +236,9 @@ class GalerkinBeamProblem(BeamBase):
         #: ``(row, axis)`` of each roller end: its free position component (static analyses)
         self.rollers = tuple(self._roller(e, kind, self.gs) for e, kind in zip(self.ends, (bcs.start, bcs.end))
                              if kind == "roller")
+        #: ``(row, component)`` of each pinned end: the material rotation component it turns by
+        self.pins = tuple(self._pin(e, bcs.pin_axis, self.gs) for e, kind in zip(self.ends, (bcs.start, bcs.end))
+                          if kind == "pinned")
         fixp, fixr = np.zeros(n, bool), np.zeros(n, bool)
         for e in self.ends:
             fixp[e.index] |= e.fix_position
@@ -462,7 +465,7 @@ class GalerkinBeamProblem(BeamBase):
     @staticmethod
     def _end(index, point, normal, kind, load, motion, translation):
         BeamBase.check_end_load(kind, load, normal)  # a roller's are checked with its axis (_roller)
-        return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged"),
+        return _GEnd(index=index, point=point, normal=normal, fix_position=kind in ("clamped", "hinged", "pinned"),
                      fix_rotation=kind == "clamped", load=load, motion=motion, translation=translation)
 
     @staticmethod
@@ -479,9 +482,25 @@ class GalerkinBeamProblem(BeamBase):
                              f"component along axis {'xyz'[axis]}")
         return e.index, axis
 
+    @staticmethod
+    def _pin(e, axis, gs) -> tuple[int, int]:
+        """``(row, component)`` of a pinned end: the axis of its reference section frame that
+        the pin axis lies along (the end turns about it only)."""
+        where = "start" if e.normal < 0 else "end"
+        local = gs.R0[e.point].T @ np.asarray(axis, dtype=float)
+        k = int(np.argmax(np.abs(local)))
+        if abs(abs(local[k]) - 1.0) > 1e-9:
+            raise ValueError(f"bc.pin_axis = {np.round(axis, 6).tolist()}: must lie along an axis of the {where} "
+                             f"section (d1, d2, d3 = {np.round(gs.R0[e.point].T, 6).tolist()})")
+        if np.linalg.norm(np.cross(e.load.couple, axis)) > 0.0:
+            raise ValueError(f"loads.{where}.couple: a pinned end takes the couple across its axis; give only the "
+                             "component along bc.pin_axis")
+        return e.index, k
+
     def _refuse_rollers(self) -> None:
-        if self.rollers:
-            raise ValueError("a roller end (bc.start or bc.end = 'roller') is for static and buckling analyses; "
+        if self.rollers or self.pins:
+            raise ValueError("a roller or pinned end (bc.start or bc.end = 'roller' or 'pinned') is for static "
+                             "and buckling analyses; "
                              "use hinged or clamped ends for dynamics and modes")
 
     def _make_kernels(self):
@@ -681,17 +700,23 @@ class GalerkinBeamProblem(BeamBase):
         """Force (spatial) and couple (material) each support exerts on its control value:
         the residual of that row, ``mu (M v')_d - F_d`` and ``J (M W')_d - T_d``. With a roller
         the problem is static (no accelerations): a roller takes the force across its axis and
-        the twisting couple."""
+        the twisting couple; so with a pin, which takes the force and the couple across its
+        axis."""
         zero = np.zeros((4, self.n, 3))
-        k = zero if self.rollers else self.increment_rate(t, y, zero)
+        k = zero if self.rollers or self.pins else self.increment_rate(t, y, zero)
         F, T = self._forces(t, y, self.B0 @ y.w)
         out = {}
         for row, axis in self.rollers:
             f, c = -F[row], np.zeros(3)
             f[axis], c[2] = 0.0, -T[row, 2]
             out["start" if row == 0 else "end"] = (f, c)
+        pinned = dict(self.pins)
         for e in self.ends:
-            if e.fix_position or e.fix_rotation:
+            if e.index in pinned:
+                c = -T[e.index].copy()
+                c[pinned[e.index]] = 0.0
+                out[e.name] = (-F[e.index], c)
+            elif e.fix_position or e.fix_rotation:
                 i = e.index
                 f = self._M_mu[i] @ k[2] - F[i] if e.fix_position else np.zeros(3)
                 c = np.array([self._M_J[d][i] @ k[3][:, d] for d in range(3)]) - T[i] if e.fix_rotation \

@@ -17,8 +17,10 @@ import numpy as np
 from ..errors import ParameterError
 
 #: End conditions. ``roller``: the end moves along its reference tangent only and does not
-#: twist (a fork support); static and buckling analyses of the Galerkin beam only.
-END_TYPES = ("clamped", "hinged", "free", "roller")
+#: twist (a fork support); ``pinned``: the end does not move and turns only about
+#: ``BoundaryConditions.pin_axis`` (a pin, for frames in a plane); both for static and
+#: buckling analyses of the Galerkin beam only.
+END_TYPES = ("clamped", "hinged", "free", "roller", "pinned")
 
 
 @dataclass(frozen=True)
@@ -401,15 +403,20 @@ class BoundaryConditions:
     end_motion: SupportMotion | None = None
     start_translation: SupportMotion | None = None
     end_translation: SupportMotion | None = None
+    pin_axis: tuple = (0.0, 0.0, 1.0)
 
     def __post_init__(self):
+        axis = np.asarray(self.pin_axis, dtype=float)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.linalg.norm(axis) > 0:
+            raise ParameterError("pin_axis", f"expected a nonzero 3-vector, got {self.pin_axis!r}")
+        object.__setattr__(self, "pin_axis", tuple(float(x) for x in axis / np.linalg.norm(axis)))
         for name in ("start", "end"):
             if getattr(self, name) not in END_TYPES:
                 raise ParameterError(name, f"expected one of {', '.join(END_TYPES)}, got {getattr(self, name)!r}")
             if getattr(self, f"{name}_motion") is not None and getattr(self, name) != "clamped":
                 raise ParameterError(f"{name}_motion", f"a prescribed rotation needs a clamped end, not "
                                                        f"{getattr(self, name)!r}")
-            if getattr(self, f"{name}_translation") is not None and getattr(self, name) in ("free", "roller"):
+            if getattr(self, f"{name}_translation") is not None and getattr(self, name) in ("free", "roller", "pinned"):
                 raise ParameterError(f"{name}_translation", "a prescribed displacement needs a clamped or hinged "
                                                             "end, not 'free'")
 

@@ -195,8 +195,8 @@ class BeamProblem(BeamBase):
     # ------------------------------------------------------------------ set-up
     @staticmethod
     def _end(index, normal, kind, load, l_s, motion=None, translation=None):
-        if kind == "roller":
-            raise ValueError(f"bc.{'start' if normal < 0 else 'end'} = 'roller' needs space.formulation = "
+        if kind in ("roller", "pinned"):
+            raise ValueError(f"bc.{'start' if normal < 0 else 'end'} = '{kind}' needs space.formulation = "
                              "\"galerkin\" (static and buckling analyses)")
         BeamProblem.check_end_load(kind, load, normal)
         return _End(

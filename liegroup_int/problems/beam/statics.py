@@ -107,6 +107,7 @@ class _Unknowns:
         free = [(~pb.fix_position) & (follower == np.arange(n)), (~pb.fix_rotation) & (turns == np.arange(n))]
         # a roller row: its position along its axis, its bending rotations (no twist)
         kept = {(0, row): (axis,) for row, axis in pb.rollers} | {(1, row): (0, 1) for row, _ in pb.rollers}
+        kept |= {(1, row): (comp,) for row, comp in pb.pins}  # a pinned row turns about its pin only
         idx = [(f, i, d) for i in range(n) for f in (0, 1) if free[f][i] for d in kept.get((f, i), range(3))]
         self.hinges = tuple(pb.hinges)
         self.n_plain = len(idx)
