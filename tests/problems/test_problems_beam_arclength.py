@@ -133,3 +133,24 @@ force = [0.0, {-P!r}, 0.0]
     assert s["limit_load_factor"] == pytest.approx(arc_length_path(_arch(), steps=60, ds=0.05, lam_max=1.0).limit,
                                                    rel=1e-12)
     assert main(["static", str(scene), "--arc-length", "-1", "--out", str(tmp_path / "bad")]) == 2
+
+
+def test_a_singular_tangent_ends_the_path_instead_of_raising(monkeypatch):
+    """A tangent that LU finds exactly singular (here from the fifth factorization on,
+    made zero) ends the path like a corrector that does not converge: the steps before it
+    are kept, ``converged`` is False, and nothing raises (the CLI then prints one line)."""
+    from liegroup_int.problems.beam import arclength
+
+    pb = _arch(**{"space.n_ctrl": 11})
+    real = arclength._System.tangent
+    calls = []
+
+    def tangent(self, *args, **kwargs):
+        calls.append(1)
+        J = real(self, *args, **kwargs)
+        return J if len(calls) <= 4 else J * 0.0
+
+    monkeypatch.setattr(arclength._System, "tangent", tangent)
+    res = arc_length_path(pb, steps=10, ds=0.05)
+    print(f"{len(res.load_factors) - 1} steps kept, converged {res.converged}")
+    assert not res.converged and len(res.load_factors) >= 2

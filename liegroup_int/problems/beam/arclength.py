@@ -74,13 +74,24 @@ def _load(system: _System, y) -> np.ndarray:
     return system.residual(y, 1.0) - system.residual(y, 0.0)
 
 
-def _step(system: _System, y, lam: float, ds: float, psi: float, prev, tol: float, scale: float, max_iter: int):
-    """One predictor-corrector step: ``(y, lambda, iterations, predictor)`` or None."""
+def _factor(system: _System, y, lam: float, r):
+    """The sparse LU of the tangent at ``(y, lam)``, or None where it is singular (a step
+    that lands on a singular tangent fails as one whose corrector does not converge)."""
     import scipy.sparse.linalg
 
+    try:
+        return scipy.sparse.linalg.splu(system.tangent(y, lam, r))
+    except RuntimeError:
+        return None
+
+
+def _step(system: _System, y, lam: float, ds: float, psi: float, prev, tol: float, scale: float, max_iter: int):
+    """One predictor-corrector step: ``(y, lambda, iterations, predictor)`` or None."""
     W = _weights(system)
     r, q = system.residual(y, lam), _load(system, y)
-    lu = scipy.sparse.linalg.splu(system.tangent(y, lam, r))
+    lu = _factor(system, y, lam, r)
+    if lu is None:
+        return None
     t = -lu.solve(q)
     dlam = ds / np.sqrt(float(t @ (W * t)) + psi**2)
     if prev is not None and float(t @ (W * prev[0])) + psi**2 * prev[1] < 0.0:
@@ -92,7 +103,9 @@ def _step(system: _System, y, lam: float, ds: float, psi: float, prev, tol: floa
         if system.dofs.norm(r) <= tol * scale:
             return y, lam, it - 1, (dx_p, dlam)
         q = _load(system, y)
-        lu = scipy.sparse.linalg.splu(system.tangent(y, lam, r))
+        lu = _factor(system, y, lam, r)
+        if lu is None:
+            return None
         a, b = -lu.solve(r), -lu.solve(q)
         dl = -float(dx_p @ (W * a)) / (float(dx_p @ (W * b)) + psi**2 * dlam)
         y, lam = system.move(y, a + dl * b), lam + dl
