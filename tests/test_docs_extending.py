@@ -57,9 +57,13 @@ def test_printed_output_is_what_the_page_says(page):
     _, printed = page
     # the page's comments: "[1.5]" (SO2 angle), "1 2.741068 29 True" (the free body's
     # terminal flip event on the dense output), "7.0e-06" (the heavy top's energy error over
-    # 1000 s with yoshida4), "5.0e-03" (the double pendulum's over 500 s with RATTLE's
-    # yoshida4) and "True" (SE3 screw motion)
-    assert printed == ["", "[1.5]\n", "", "1 2.741068 29 True\n", "7.0e-06\n", "5.0e-03\n", "True\n"]
+    # 1000 s with yoshida4), "3.7e-03" (the double pendulum's over 500 s with RATTLE's
+    # yoshida4) and "True" (SE3 screw motion). The double pendulum is chaotic: a relative
+    # change of 1e-15 in its initial state moves that largest error between 2.7e-3 and 4.1e-3
+    # (measured), so the page's digits hold for one build of the libraries only; what the page
+    # claims is the bound, asserted as [1e-3, 1e-2] (RKMK4 at the same step drifts by 2e-2).
+    assert printed[:5] + printed[6:] == ["", "[1.5]\n", "", "1 2.741068 29 True\n", "7.0e-06\n", "True\n"]
+    assert 1e-3 <= float(printed[5]) <= 1e-2, printed[5]
 
 
 def test_so2_derived_api(page):
