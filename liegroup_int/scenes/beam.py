@@ -180,8 +180,9 @@ KEYS = {
             "t_on, t_off, ramp, table); a beam is split at s into two patches joined rigidly, where the load acts "
             "(with [[joints]]: inside a member only)"),
         Key("bodies", "tables", (), "[[bodies]] entries: rigid bodies fixed to an end of the beam (galerkin): at "
-            "(\"start\" or \"end\"), mass [kg], inertia (principal moments about the end point along the end "
-            "section's d1, d2, d3 [kg m^2]); the centre of mass at the end point (a tip mass, a hub)"),
+            "(\"start\" or \"end\"), mass [kg], inertia (principal moments about the centre of mass along the end "
+            "section's d1, d2, d3 [kg m^2]), offset (centre of mass from the end point, section frame [m]), force "
+            "and couple on the body with a time profile (a tip mass, a hub, a payload)"),
         Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
             "(columns s0p5_x, s0p5_y, s0p5_z for 0.5), e.g. [0.5, 1.0]", "", _fractions),
         Key("output.fields", "strs", (), "section quantities at the collocation points, in results.h5 snapshots "
@@ -292,9 +293,16 @@ BODY_KEYS = {
     "at": Key("at", "str", "end", "the end the body is fixed to: \"start\" or \"end\" of the beam (or chain), or "
               "\"<member>.start\" / \"<member>.end\" of a named [[beams]] member (a frame's joint included)"),
     "mass": Key("mass", "float", 0.0, "mass", "kg", non_negative),
-    "inertia": Key("inertia", "vec3", ZERO, "principal moments of inertia about the end point, along the end "
-                   "section's d1, d2, d3", "kg m^2"),
-    "offset": Key("offset", "vec3", ZERO, "centre of mass from the end point (only [0, 0, 0] is supported)", "m"),
+    "inertia": Key("inertia", "vec3", ZERO, "principal moments of inertia about the centre of mass, along the "
+                   "end section's d1, d2, d3", "kg m^2"),
+    "offset": Key("offset", "vec3", ZERO, "centre of mass from the end point, along the end section's d1, d2, d3 "
+                  "(it turns with the end)", "m"),
+    "force": Key("force", "vec3", ZERO, "force on the body at its centre of mass (spatial, dead; material with "
+                 "follower)", "N"),
+    "couple": Key("couple", "vec3", ZERO, "couple on the body (spatial, dead; material with follower)", "N m"),
+    "follower": Key("follower", "bool", False, "the force and couple turn with the body"),
+    **PROFILE_KEYS,
+    "table": Key("table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
 }
 #: Keys of one ``[[point_loads]]`` entry.
 POINT_LOAD_KEYS = {
@@ -944,12 +952,13 @@ def _bodies(scene: Scene, space=None) -> tuple:
     for i, entry in enumerate(scene["bodies"]):
         where = f"{scene.source}: bodies[{i}]"
         v = resolve_keys(BODY_KEYS, entry, where)
-        if np.any(v["offset"]):
-            raise SceneError(f"{where}: key 'offset' = {list(v['offset'])}: a body off the end point is not "
-                             "supported; give its inertia about the end point (parallel-axis theorem)")
         side, patch = _body_end(scene, where, v["at"], space)
         try:
-            out.append(EndBody(at=side, mass=v["mass"], inertia=tuple(v["inertia"]), patch=patch))
+            prof = Profile(kind=v["profile"], t_on=v["t_on"], t_off=v["t_off"], ramp=v["ramp"], table=v["table"])
+            load = EndLoad(force=v["force"], couple=v["couple"], force_profile=prof, couple_profile=prof,
+                           follower=v["follower"])
+            out.append(EndBody(at=side, mass=v["mass"], inertia=tuple(v["inertia"]), patch=patch,
+                               offset=tuple(v["offset"]), load=load))
         except ParameterError as exc:
             raise SceneError(f"{where}: key '{exc.field}': {exc.reason}") from None
     return tuple(out)

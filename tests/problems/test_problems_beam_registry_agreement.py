@@ -61,7 +61,7 @@ def _build(name, overrides=None):
     sc = load_scene(name, {"integrator.backend": "numba", **(overrides or {})})
     sim = KINDS["beam"].build(sc)
     nb = sim.problem
-    bodies = tuple(b for *_, b in getattr(nb, "bodies", ()))  # end bodies (Galerkin)
+    bodies = getattr(nb, "end_bodies", ())  # end bodies (Galerkin)
     npb = beam_problem(nb.space, nb.constants, nb.bcs, nb.loads, nb.initial, backend="numpy",
                        kelvin_voigt=nb.tau, formulation=nb.formulation, bodies=bodies,
                        **({"quadrature": nb.quadrature} if nb.formulation == "galerkin" else {}))

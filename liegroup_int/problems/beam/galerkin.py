@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3, left_jacobian
+from ...groups.so3 import angle, cross, dexpinv_so3, exp_so3, hat, left_jacobian
 from ...iga import CollocationSpace
 from ...iga.galerkin import BandedSPD, GalerkinSpace
 from ...iga.quadrature import DEFAULT_RULE
@@ -124,6 +124,31 @@ class _GHinge(NamedTuple):
     damping: float
 
 
+class _GBody(NamedTuple):
+    """One end body: its control row and point, the :class:`~.model.EndBody`, its offset
+    ``c`` ``(3,)`` and inertia about the end point ``J`` ``(3, 3)`` (section frame), its
+    weight ``m g`` ``(3,)``."""
+
+    row: int
+    point: int
+    body: object
+    c: np.ndarray
+    J: np.ndarray
+    weight: np.ndarray
+
+
+class _GCoupling(NamedTuple):
+    """The mass coupling of the bodies off their end points (:meth:`GalerkinBeamProblem.
+    _couple_bodies`): their indices in ``bodies``, the responses ``P`` ``(6 k, n, 3)`` of the
+    constrained mass matrices to unit forces (three components, field 2) and couples (three,
+    field 3) on each body's row, and ``G`` ``(6 k, 6 k)``, those responses read back on the
+    bodies' rows."""
+
+    index: tuple
+    P: np.ndarray
+    G: np.ndarray
+
+
 @dataclass(frozen=True)
 class _GEnd:
     """One end: its control index, point index, outward normal, supports, loads."""
@@ -165,10 +190,13 @@ class GalerkinBeamProblem(BeamBase):
         ``integration = "reduced"``; ``"auto"`` (the default): the Gaussian spline rule
         ``"gauss-spline"`` where it is found for p = 3..7, else ``"gauss-p"``.
     bodies : tuple of EndBody
-        Rigid bodies fixed to the ends (at most one per end): their mass and principal
-        inertia join the end rows of the consistent mass matrices (the B-spline basis
-        interpolates at the ends, so the end values are the body's velocity and material
-        angular velocity), their weight the load vector, their gyroscopic couple the rate.
+        Rigid bodies fixed to the ends (at most one per end): their mass and inertia about
+        the end point join the end rows of the consistent mass matrices (the B-spline basis
+        interpolates at the ends, so the end values are the end's velocity and material
+        angular velocity), their weight and loads the load vector, their gyroscopic couple
+        the rate. A body whose centre is off the end point couples the end's translation
+        and rotation through the mass ``-m R hat(c)`` (:meth:`_couple_bodies`), its weight
+        and force act with the arm ``R c``, and its centripetal force joins the rate.
     """
 
     formulation = "galerkin"
@@ -192,12 +220,16 @@ class GalerkinBeamProblem(BeamBase):
         self.bodies = self._bodies(bodies, g)
         self._supports(bcs, loads)
         self.joints = self._joints(space, loads)
-        #: ``(row, point, EndLoad)`` of every loaded end and joint
-        self.point_loads = tuple((e.index, e.point, e.load) for e in self.ends if e.load.active) + tuple(
-            (j.a, j.point, j.load) for j in self.joints if j.load is not None)
+        #: ``(row, point, EndLoad, arm)`` of every loaded end, joint and body (``arm`` ``(3,)``:
+        #: the point of application from the row's point, section frame; a body's offset)
+        zero = np.zeros(3)
+        self.point_loads = tuple((e.index, e.point, e.load, zero) for e in self.ends if e.load.active) + tuple(
+            (j.a, j.point, j.load, zero) for j in self.joints if j.load is not None) + tuple(
+            (b.row, b.point, b.body.load, b.c) for b in self.bodies if b.body.load.active)
         self._masses()
         self._constraints = self._joint_constraints()
         self.hinges = self._hinges(space)
+        self._coupling = self._body_coupling()
         self.quad = self.gs.w_full
         self.has_quadrature = bool(self.tau > 0.0 or self.has_q or self.has_m or self.moving_ends
                                    or self.translating_ends or self.point_loads
@@ -251,17 +283,17 @@ class GalerkinBeamProblem(BeamBase):
         gs = self.gs
         self._M_mu = gs.weighted_mass(self.mu)
         self._M_J = tuple(gs.weighted_mass(self.Jm[:, d]) for d in range(3))
-        for row, _, body in self.bodies:
-            self._M_mu[row, row] += body.mass
+        for b in self.bodies:
+            self._M_mu[b.row, b.row] += b.body.mass
             for d in range(3):
-                self._M_J[d][row, row] += body.inertia[d]
+                self._M_J[d][b.row, b.row] += b.J[d, d]
         self.mass_position = BandedSPD(self._M_mu, self.fix_position)
         self.mass_theta = BandedSPD(gs.point_mass, self.fix_rotation)
         self.mass_rotation = tuple(BandedSPD(M, self.fix_rotation) for M in self._M_J)
 
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
-        """``(row, point, EndBody)`` of each end body; their mass joins the momentum weights
-        and their weight the load vector."""
+        """:class:`_GBody` of each end body; their mass joins the momentum weights and their
+        weight the load vector (its moment about the end point: :meth:`_body_terms`)."""
         out, seen = [], set()
         for b in bodies:
             row, point = self._body_place(b)
@@ -272,8 +304,105 @@ class GalerkinBeamProblem(BeamBase):
             self.mass_weights[row] += b.mass
             self.load_vector[row] += b.mass * g
             self.has_q = self.has_q or bool(b.mass and np.any(g))
-            out.append((row, point, b))
+            out.append(_GBody(row, point, b, np.asarray(b.offset, float), b.end_inertia, b.mass * g))
         return tuple(out)
+
+    @property
+    def end_bodies(self) -> tuple:
+        """The :class:`~.model.EndBody` objects the problem was built with."""
+        return tuple(b.body for b in self.bodies)
+
+    def _body_coupling(self) -> _GCoupling | None:
+        """:class:`_GCoupling` of the bodies off their end points (None if there is none)."""
+        index = tuple(k for k, b in enumerate(self.bodies) if b.body.mass > 0.0 and np.any(b.c))
+        if not index:
+            return None
+        if self.hinges:
+            raise ValueError("bodies: a body off its end point (offset) in a frame with hinges is not supported; "
+                             "put its centre at the end point or use rigid or ball joints")
+        driven = {e.index for e in self.moving_ends + self.translating_ends}
+        if any(self.bodies[i].row in driven for i in index):
+            raise ValueError("bodies: a body off its end point (offset) at an end with prescribed motion is not "
+                             "supported; put its centre at the end point")
+        P = np.zeros((6 * len(index), self.n, 3))
+        for k, i in enumerate(index):
+            for e in range(3):
+                r = np.zeros((self.n, 3))
+                r[self.bodies[i].row, e] = 1.0
+                P[6 * k + e] = self._constrain(self.mass_position.solve(r), "position")
+                P[6 * k + 3 + e] = self._constrain(self._solve_rotation(r, 0.0), "rotation")
+        rows = [self.bodies[i].row for i in index]
+        G = np.zeros((6 * len(index),) * 2)
+        for l in range(6 * len(index)):
+            for k, r in enumerate(rows):
+                G[6 * k:6 * k + 3, l] = P[l, r] if l % 6 < 3 else 0.0
+                G[6 * k + 3:6 * k + 6, l] = P[l, r] if l % 6 >= 3 else 0.0
+        return _GCoupling(index, P, G)
+
+    def _body_mass(self, y) -> np.ndarray:
+        """The coupled bodies' mass blocks not in the banded matrices, ``(6 k, 6 k)``: per body
+        ``[[0, -m R hat(c)], [m hat(c) R^T, J - diag(J)]]`` (``R`` the end's rotation; rows and
+        columns: the end's acceleration, then its material angular acceleration)."""
+        cp = self._coupling
+        C = np.zeros((6 * len(cp.index),) * 2)
+        for k, i in enumerate(cp.index):
+            b = self.bodies[i]
+            B = -b.body.mass * y.R[b.point] @ hat(b.c)
+            C[6 * k:6 * k + 3, 6 * k + 3:6 * k + 6] = B
+            C[6 * k + 3:6 * k + 6, 6 * k:6 * k + 3] = B.T
+            C[6 * k + 3:6 * k + 6, 6 * k + 3:6 * k + 6] = b.J - np.diag(np.diag(b.J))
+        return C
+
+    def _couple_bodies(self, y, xp: np.ndarray, xr: np.ndarray) -> tuple:
+        """The accelerations ``xp`` and material angular accelerations ``xr`` of the banded
+        (and joint-constrained) solves corrected for the coupled bodies' mass blocks ``C``
+        (:meth:`_body_mass`): ``x = x0 - P z`` with ``(I + C G) z = C U^T x0`` (Woodbury's
+        identity on the constrained solve, ``U`` the bodies' rows), and ``z = C U^T x``, the
+        coupling forces and couples on those rows, ``(6 k,)``."""
+        cp = self._coupling
+        if cp is None:
+            return xp, xr, np.zeros(0)
+        C = self._body_mass(y)
+        z = np.linalg.solve(np.eye(C.shape[0]) + C @ cp.G, C @ self._body_rows(xp, xr))
+        pos = (np.arange(z.size) % 6) < 3
+        return (xp - np.tensordot(z[pos], cp.P[pos], axes=1), xr - np.tensordot(z[~pos], cp.P[~pos], axes=1), z)
+
+    def _forces_on_rows(self, t: float, y, k: np.ndarray | None = None) -> tuple:
+        """:meth:`_forces` less the coupled bodies' coupling forces ``U C U^T x`` at the rates
+        ``k`` (computed if None): what the banded mass matrices balance row by row."""
+        F, T = self._forces(t, y, self.B0 @ y.w)
+        if self._coupling is None:
+            return F, T
+        if k is None:
+            k = self.increment_rate(t, y, np.zeros((4, self.n, 3)))
+        Fz, Tz = self._coupling_loads(self._body_mass(y) @ self._body_rows(k[2], k[3]))
+        return F - Fz, T - Tz
+
+    def _body_rows(self, xp: np.ndarray, xr: np.ndarray) -> np.ndarray:
+        """``U^T x``: the coupled bodies' rows of the two fields, ``(6 k,)``."""
+        return np.concatenate([np.concatenate([xp[self.bodies[i].row], xr[self.bodies[i].row]])
+                               for i in self._coupling.index])
+
+    def _coupling_loads(self, z: np.ndarray) -> tuple:
+        """``U z`` of :meth:`_couple_bodies` as forces and couples on the control rows,
+        ``(n, 3)`` each."""
+        Fz, Tz = np.zeros((self.n, 3)), np.zeros((self.n, 3))
+        for k, i in enumerate(self._coupling.index if self._coupling else ()):
+            Fz[self.bodies[i].row] += z[6 * k:6 * k + 3]
+            Tz[self.bodies[i].row] += z[6 * k + 3:6 * k + 6]
+        return Fz, Tz
+
+    def _body_terms(self, y, F: np.ndarray, T: np.ndarray, f: float) -> None:
+        """The bodies' inertial terms and the moment of their weight into ``F, T``: the
+        gyroscopic couple ``-W x J W``; off the end point the centripetal force ``-m R (W x
+        (W x c))`` and the weight's moment ``c x R^T (f m g)`` (``f`` its profile)."""
+        for b in self.bodies:
+            W = y.w[b.row]
+            T[b.row] -= np.cross(W, b.J @ W)
+            if np.any(b.c):
+                Rr = y.R[b.point]
+                F[b.row] -= b.body.mass * (Rr @ np.cross(W, np.cross(W, b.c)))
+                T[b.row] += f * np.cross(b.c, Rr.T @ b.weight)
 
     def _body_place(self, b) -> tuple[int, int]:
         """Control row and point of a body's end."""
@@ -513,7 +642,7 @@ class GalerkinBeamProblem(BeamBase):
         """The same problem with damping ``tau`` [s]."""
         return GalerkinBeamProblem(self.space, self.constants, self.bcs, self.loads, self.initial,
                                    backend=self.backend, kelvin_voigt=tau, integration=self.integration,
-                                   quadrature=self.quadrature, bodies=tuple(b for *_, b in self.bodies))
+                                   quadrature=self.quadrature, bodies=self.end_bodies)
 
     @property
     def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -593,6 +722,7 @@ class GalerkinBeamProblem(BeamBase):
         out[3] = self._constrain_hinges(
             self._constrain(self._solve_rotation(T, self._prescribed_acceleration(t, "rotation")), "rotation"), y, u,
             "rotation")
+        out[2], out[3], _ = self._couple_bodies(y, out[2], out[3])
         return out
 
     def _prescribed_acceleration(self, t: float, which: str) -> np.ndarray:
@@ -640,15 +770,16 @@ class GalerkinBeamProblem(BeamBase):
         T = self.B0.T @ pt - self.B1.T @ (wf * M)
         if self.has_q:
             F += f * self.load_vector
-        for row, _, body in self.bodies:
-            T[row] -= np.cross(y.w[row], np.multiply(body.inertia, y.w[row]))
+        self._body_terms(y, F, T, f)
         for h, (_, _, m) in zip(self.hinges, self._hinge_springs(y)):
             T[h.b] -= m * h.axis
             T[h.a] += m * (y.R[h.point].T @ (y.R[h.point_b] @ h.axis))
-        for row, point, ld in self.point_loads:
+        for row, point, ld, arm in self.point_loads:
             Re = R[point]
             if np.any(ld.force):
-                F[row] += load_factor * self._end_force(ld, t, Re)
+                fo = load_factor * self._end_force(ld, t, Re)
+                F[row] += fo
+                T[row] += np.cross(arm, Re.T @ fo)
             if np.any(ld.couple):
                 T[row] += load_factor * (Re.T @ self._end_couple(ld, t, Re))
         return F, T
@@ -704,7 +835,7 @@ class GalerkinBeamProblem(BeamBase):
         axis."""
         zero = np.zeros((4, self.n, 3))
         k = zero if self.rollers or self.pins else self.increment_rate(t, y, zero)
-        F, T = self._forces(t, y, self.B0 @ y.w)
+        F, T = self._forces_on_rows(t, y, k)
         out = {}
         for row, axis in self.rollers:
             f, c = -F[row], np.zeros(3)
@@ -747,12 +878,17 @@ class GalerkinBeamProblem(BeamBase):
                 p += float(sup[e.name][1] @ y.w[e.index])
             for e in self.translating_ends:
                 p += float(sup[e.name][0] @ y.v[e.index])
-        for row, point, ld in self.point_loads:
+        for row, point, ld, arm in self.point_loads:
             Re = y.R[point]
             if np.any(ld.force):
-                p += float(self._end_force(ld, t, Re) @ y.v[row])
+                fo = self._end_force(ld, t, Re)
+                p += float(fo @ y.v[row] + np.cross(arm, Re.T @ fo) @ y.w[row])
             if np.any(ld.couple):
                 p += float((Re.T @ self._end_couple(ld, t, Re)) @ y.w[row])
+        if self.has_q:
+            f = self.loads.distributed_profile(t)
+            for b in self.bodies:  # the weight's moment about the end point
+                p += f * float(np.cross(b.c, y.R[b.point].T @ b.weight) @ y.w[b.row])
         return p
 
     # ------------------------------------------------------------------ diagnostics
@@ -760,16 +896,22 @@ class GalerkinBeamProblem(BeamBase):
         """Kinetic (consistent mass), strain and load-potential energy [J]."""
         kin = 0.5 * (float(np.sum(y.v * (self._M_mu @ y.v)))
                      + sum(float(y.w[:, d] @ (self._M_J[d] @ y.w[:, d])) for d in range(3)))
+        for b in self.bodies:  # off the diagonal blocks: m v . R (W x c) + 1/2 W . (J - diag J) W
+            W = y.w[b.row]
+            kin += b.body.mass * float(y.v[b.row] @ (y.R[b.point] @ np.cross(W, b.c)))
+            kin += 0.5 * float(W @ ((b.J - np.diag(np.diag(b.J))) @ W))
         Gt, N, Mm = self._resultants_elastic(y)
         strain = 0.5 * (float(self.wa @ np.sum(N * (Gt - self.gs.gamma0), axis=1))
                         + float(self.wf @ np.sum(Mm * (y.K - self.gs.K0), axis=1))
                         + sum(h.stiffness * phi**2 for h, (phi, _, _) in zip(self.hinges, self._hinge_springs(y))))
         potential = 0.0
         if self.has_q:
-            potential -= self.loads.distributed_profile(t) * float(np.sum(self.load_vector * y.c))
-        for row, _, ld in self.point_loads:
+            f = self.loads.distributed_profile(t)
+            potential -= f * (float(np.sum(self.load_vector * y.c))
+                              + sum(float(b.weight @ (y.R[b.point] @ b.c)) for b in self.bodies))
+        for row, point, ld, arm in self.point_loads:
             if np.any(ld.force) and ld.force_profile.is_constant and not ld.follower:
-                potential -= float(np.dot(ld.force, y.c[row]))
+                potential -= float(np.dot(ld.force, y.c[row] + y.R[point] @ arm))
         return {"kinetic": kin, "strain": strain, "potential": potential}
 
     def _resultants_elastic(self, y):
@@ -781,9 +923,13 @@ class GalerkinBeamProblem(BeamBase):
         c, v, Om = self.B0 @ y.c, self.B0 @ y.v, self.B0 @ y.w
         wf = self.wf[:, None]
         h = np.sum(wf * (cross(c, self.mu[:, None] * v) + rot(y.R, self.Jm * Om)), axis=0)
-        for row, point, body in self.bodies:
-            h += np.cross(y.c[row], body.mass * y.v[row]) + y.R[point] @ np.multiply(body.inertia, y.w[row])
-        return self.mass_weights @ y.v, h
+        p = self.mass_weights @ y.v
+        for b in self.bodies:  # the centre x + R c moves with v + R (W x c)
+            Rr, W = y.R[b.point], y.w[b.row]
+            vc = b.body.mass * (y.v[b.row] + Rr @ np.cross(W, b.c))
+            h += np.cross(y.c[b.row] + Rr @ b.c, vc) + Rr @ np.multiply(b.body.inertia, W)
+            p += vc - b.body.mass * y.v[b.row]
+        return p, h
 
     def section_fields(self, y, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
         """Section quantities at the points (:attr:`frame_points`), ``(m, 3)`` each, as
@@ -810,7 +956,7 @@ class GalerkinBeamProblem(BeamBase):
         the first end."""
         if not self.joints:
             return ()
-        F, T = self._forces(t, y, self.B0 @ y.w)
+        F, T = self._forces_on_rows(t, y)
         lam_f = self._multipliers(self.mass_position.solve(F, self._prescribed_acceleration(t, "position")),
                                   "position")
         x = self._solve_rotation(T, self._prescribed_acceleration(t, "rotation"))

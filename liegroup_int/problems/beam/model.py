@@ -261,8 +261,9 @@ class EndLoad:
 
 @dataclass(frozen=True)
 class EndBody:
-    """A rigid body fixed to one end of the beam, its centre of mass at the end point and
-    its principal axes along the end section's ``d1, d2, d3`` (a tip mass, a hub).
+    """A rigid body fixed to one end of the beam (a tip mass, a hub, a payload): its centre
+    of mass at ``offset`` from the end point and its principal axes along the end section's
+    ``d1, d2, d3``, optionally loaded.
 
     Parameters
     ----------
@@ -271,16 +272,25 @@ class EndBody:
     mass : float
         Mass [kg] (>= 0).
     inertia : (3,) tuple
-        Principal moments of inertia about the end point, along ``d1, d2, d3`` [kg m^2] (>= 0).
+        Principal moments of inertia about the centre of mass, along ``d1, d2, d3`` [kg m^2]
+        (>= 0).
     patch : int
         A frame's patch (member piece) whose end it is; -1: the end of the whole beam or
         chain.
+    offset : (3,) tuple
+        The centre of mass from the end point, components along the end section's ``d1, d2,
+        d3`` [m] (it turns with the section).
+    load : EndLoad
+        Force and couple on the body, the force acting at its centre of mass (dead, or with
+        ``follower`` turning with the body).
     """
 
     at: str = "end"
     mass: float = 0.0
     inertia: tuple = (0.0, 0.0, 0.0)
     patch: int = -1
+    offset: tuple = (0.0, 0.0, 0.0)
+    load: EndLoad = field(default_factory=EndLoad)
 
     def __post_init__(self):
         if self.at not in ("start", "end"):
@@ -291,6 +301,17 @@ class EndBody:
         if J.shape != (3,) or not np.all(np.isfinite(J)) or np.any(J < 0.0):
             raise ParameterError("inertia", f"expected three moments of inertia >= 0, got {self.inertia!r}")
         object.__setattr__(self, "inertia", tuple(float(x) for x in J))
+        c = np.asarray(self.offset, dtype=float)
+        if c.shape != (3,) or not np.all(np.isfinite(c)):
+            raise ParameterError("offset", f"expected three finite components, got {self.offset!r}")
+        object.__setattr__(self, "offset", tuple(float(x) for x in c))
+
+    @property
+    def end_inertia(self) -> np.ndarray:
+        """The inertia about the end point in the section frame, ``(3, 3)``: ``diag(inertia)
+        + mass (|c|^2 I - c c^T)`` (parallel axes)."""
+        c = np.asarray(self.offset)
+        return np.diag(self.inertia) + self.mass * (float(c @ c) * np.eye(3) - np.outer(c, c))
 
 
 @dataclass(frozen=True)

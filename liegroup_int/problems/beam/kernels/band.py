@@ -262,3 +262,26 @@ def chol_solve9(U, dinv, a, b, c):
         for j in range(i + 1, min(n - 1, i + q) + 1):
             s = _eliminate9(U, q + i - j, j, j, a, b, c, s)
         _store9(dinv, i, a, b, c, s)
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def dense_solve(S, m):
+    """``S[:, :m]^-1 S[:, m]`` into ``S[:, m]`` in place: Gaussian elimination with partial
+    pivoting of a small dense system (the kernels' constraint capacitances, ``m`` up to a
+    few dozen)."""
+    for i in range(m):
+        p = i
+        for k in range(i + 1, m):
+            if abs(S[k, i]) > abs(S[p, i]):
+                p = k
+        for q in range(m + 1):
+            S[i, q], S[p, q] = S[p, q], S[i, q]
+        for k in range(i + 1, m):
+            f = S[k, i] / S[i, i]
+            for q in range(i, m + 1):
+                S[k, q] -= f * S[i, q]
+    for i in range(m - 1, -1, -1):
+        s = S[i, m]
+        for q in range(i + 1, m):
+            s -= S[i, q] * S[q, m]
+        S[i, m] = s / S[i, i]

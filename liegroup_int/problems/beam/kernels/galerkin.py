@@ -30,7 +30,7 @@ from ....groups.kernels_numba import coef_ABC, coef_D, series_table
 from ....groups.so3_coefficients import TAYLOR_THRESHOLD
 from . import adapters as ad
 from .adapters import F1, F2, F3, F4, I1, I2, c64
-from .band import basis_windows, chol_solve9, window, window2
+from .band import basis_windows, chol_solve9, dense_solve, window, window2
 from .physics import (curvature_rate, dexpinv, dissipation, exp_rows, gamma_rate, gyroscopic, jr_times,
                       load_power, point_load, resultant, rows_T_times, strain)
 from .profiles import LoadTable, set_loads
@@ -76,14 +76,24 @@ class GalerkinData(NamedTuple):
     point_force: I1
     point_couple: I1
     point_follower: I1
+    point_arm: F2  # (nl, 3) point of application from the point (a body's offset, section frame)
     joint_ab: I2  # (J, 2) rows of each joint pair, Q = R0_a^T R0_b (J, 3, 3)
     joint_q: F3
     Y: F4  # (3, 3 J, n, 3) constraint columns of the position, Theta and W fields
     Sinv: F3  # (3, 3 J, 3 J) S^-1 D: ball joints and hinges are 0 in Y[1:], Sinv[1:] (lam = 0)
     keep: F2  # (10, 3) work: supported rows' forces, prescribed values
     jr: F1  # (3 J,) work
-    body_row: I1  # (nb,) end bodies: control row, principal inertia (nb, 3)
-    body_J: F2
+    body_row: I1  # (nb,) end bodies: control row, point, mass, offset (nb, 3), inertia about the
+    body_pt: I1  # end point (nb, 3, 3) and weight m g (nb, 3), section frame
+    body_m: F1
+    body_c: F2
+    body_J: F3
+    body_wt: F2
+    cpl_index: I1  # (k,) bodies off their end points: responses P (6 k, n, 3), G (6 k, 6 k)
+    cpl_P: F3
+    cpl_G: F2
+    cpl_C: F2  # (6 k, 6 k) work: their mass blocks; (6 k, 6 k + 2) the capacitance, right side, U^T x
+    cpl_S: F2
     hinge_ab: I2  # (H, 4) hinges: rows a, b and points of a, b
     hinge_E: F3  # (H, 2, 3) rows perpendicular to the material axis at b
     hinge_Z: F3  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
@@ -178,6 +188,8 @@ def _point_loads(d, v, w, R, out):
         f = point_load(R, pt, row(d.loads, POINTS + 2 * l), fol) if d.point_force[l] else (0.0, 0.0, 0.0)
         m = row(d.loads, POINTS + 2 * l + 1)  # material: R^T C, follower: C
         m = (m if fol else rot_T(R, pt, m)) if d.point_couple[l] else (0.0, 0.0, 0.0)
+        if d.point_force[l]:  # the force's moment about the point: arm x R^T f
+            m = add(m, cross(row(d.point_arm, l), rot_T(R, pt, f)))
         put(out[2], idx, add(row(out[2], idx), f))
         put(out[3], idx, add(row(out[3], idx), m))
         power += load_power(f, row(v, idx), m, row(w, idx))
@@ -293,22 +305,7 @@ def _constrain_hinges(x, d, R, w, u1, field):
                     if C[l, e, c] != 0.0:
                         s += C[l, e, c] * _hinge_apply(d, k, Z[((l // 2 * 2 + field) * 2 + e) * 3 + c])
             S[k, l] = s
-    for i in range(m):  # Gaussian elimination with partial pivoting; lambda into S[:, m]
-        p = i
-        for k in range(i + 1, m):
-            if abs(S[k, i]) > abs(S[p, i]):
-                p = k
-        for q in range(m + 1):
-            S[i, q], S[p, q] = S[p, q], S[i, q]
-        for k in range(i + 1, m):
-            f = S[k, i] / S[i, i]
-            for q in range(i, m + 1):
-                S[k, q] -= f * S[i, q]
-    for i in range(m - 1, -1, -1):
-        s = S[i, m]
-        for q in range(i + 1, m):
-            s -= S[i, q] * S[q, m]
-        S[i, m] = s / S[i, i]
+    dense_solve(S, m)  # lambda into S[:, m]
     for l in range(m):
         for e in range(2):
             for c in range(3):
@@ -345,6 +342,70 @@ def _solve(d, w, out, R, u1):
     if d.hinge_S.shape[0]:
         for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
             _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field)
+
+
+@njit(cache=True, fastmath=FM, inline="always")
+def _body_terms(d, w, R, out):
+    """The end bodies' gyroscopic couple ``-W x J W``; off the end point their centripetal
+    force ``-m R (W x (W x c))`` and their weight's moment ``c x R^T (f m g)`` (``f`` the
+    distributed profile) into ``out``; returns the moment's power
+    (:meth:`GalerkinBeamProblem._body_terms`)."""
+    power = 0.0
+    for k in range(d.body_row.shape[0]):
+        r, pt, J = d.body_row[k], d.body_pt[k], d.body_J[k]
+        W = row(w, r)
+        JW = (dot(row(J, 0), W), dot(row(J, 1), W), dot(row(J, 2), W))
+        put(out[3], r, sub(row(out[3], r), cross(W, JW)))
+        c = row(d.body_c, k)
+        if dot(c, c) != 0.0:
+            put(out[2], r, axpy(-d.body_m[k], rot(R, pt, cross(W, cross(W, c))), row(out[2], r)))
+            if d.has_q:
+                mo = scale(d.loads[Q, 0], cross(c, rot_T(R, pt, row(d.body_wt, k))))
+                put(out[3], r, add(row(out[3], r), mo))
+                power += dot(mo, W)
+    return power
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def _couple_bodies(d, R, out):
+    """The accelerations ``out[2], out[3]`` corrected for the mass blocks of the bodies off
+    their end points, ``[[0, -m R hat(c)], [m hat(c) R^T, J - diag J]]``: ``x <- x - P z``
+    with ``(I + C G) z = C U^T x`` (:meth:`GalerkinBeamProblem._couple_bodies`)."""
+    nk = d.cpl_index.shape[0]
+    m6 = 6 * nk
+    C, S, G, P = d.cpl_C, d.cpl_S, d.cpl_G, d.cpl_P
+    C[:] = 0.0
+    for k in range(nk):
+        i = d.cpl_index[k]
+        r, pt, mass, c, J = d.body_row[i], d.body_pt[i], d.body_m[i], row(d.body_c, i), d.body_J[i]
+        for b in range(3):  # column b of -m R hat(c): -m R (c x e_b)
+            e = (1.0 if b == 0 else 0.0, 1.0 if b == 1 else 0.0, 1.0 if b == 2 else 0.0)
+            col = scale(-mass, rot(R, pt, cross(c, e)))
+            for a in range(3):
+                C[6 * k + a, 6 * k + 3 + b] = col[a]
+                C[6 * k + 3 + b, 6 * k + a] = col[a]
+                if a != b:
+                    C[6 * k + 3 + a, 6 * k + 3 + b] = J[a, b]
+        for e in range(3):  # U^T x into the last column
+            S[6 * k + e, m6 + 1] = out[2][r, e]
+            S[6 * k + 3 + e, m6 + 1] = out[3][r, e]
+    for a in range(m6):  # S[:, :m6 + 1] = [I + C G | C U^T x]
+        x = 0.0
+        for q in range(m6):
+            x += C[a, q] * S[q, m6 + 1]
+        for b in range(m6):
+            s = 1.0 if a == b else 0.0
+            for q in range(m6):
+                s += C[a, q] * G[q, b]
+            S[a, b] = s
+        S[a, m6] = x
+    dense_solve(S, m6)
+    for l in range(m6):
+        z = S[l, m6]
+        f = out[2] if l % 6 < 3 else out[3]
+        for j in range(f.shape[0]):
+            for q in range(3):
+                f[j, q] -= z * P[l, j, q]
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -399,13 +460,11 @@ def rates(c, v, w, R, K, u, out, d, kin):
             put(o2, j, axpy(-b1, nw, row(o2, j)))
             put(o3, j, add(row(o3, j), sub(scale(b0, p), scale(b1, Mw))))
     power += _point_loads(d, v, w, R, out)
-    for k in range(d.body_row.shape[0]):  # end bodies' gyroscopic couple (no power)
-        r = d.body_row[k]
-        wr = row(w, r)
-        Jw = (d.body_J[k, 0] * wr[0], d.body_J[k, 1] * wr[1], d.body_J[k, 2] * wr[2])
-        put(o3, r, sub(row(o3, r), cross(wr, Jw)))
+    power += _body_terms(d, w, R, out)
     power += _hinge_springs(d, R, w, out)
     _solve(d, w, out, R, u1)
+    if d.cpl_index.shape[0]:
+        _couple_bodies(d, R, out)
     if not d.power:
         return 0.0
     return power + _support_power(d, v, w, out)
@@ -548,14 +607,15 @@ def _end_loads(pb, loads: np.ndarray, table: LoadTable) -> dict:
 def _point_data(pb, loads: np.ndarray, table: LoadTable) -> dict:
     """The loaded points' fields of :class:`GalerkinData`; their loads into ``loads``."""
     pls = pb.point_loads
-    for k, (_, _, ld) in enumerate(pls):
+    for k, (_, _, ld, _) in enumerate(pls):
         table.add_or_fix(loads, POINTS + 2 * k, ld.force, ld.force_profile)
         table.add_or_fix(loads, POINTS + 2 * k + 1, ld.couple, ld.couple_profile)
     cols = [(row, point, bool(np.any(ld.force)), bool(np.any(ld.couple)), bool(ld.follower))
-            for row, point, ld in pls]
+            for row, point, ld, _ in pls]
     arr = np.array(cols, dtype=np.int64).reshape(len(pls), 5)
-    return {f"point_{name}": np.ascontiguousarray(arr[:, k])
-            for k, name in enumerate(("row", "pt", "force", "couple", "follower"))}
+    return {**{f"point_{name}": np.ascontiguousarray(arr[:, k])
+               for k, name in enumerate(("row", "pt", "force", "couple", "follower"))},
+            "point_arm": c64(np.array([arm for *_, arm in pls], dtype=float).reshape(len(pls), 3))}
 
 
 def _joint_data(pb) -> dict:
@@ -570,9 +630,22 @@ def _joint_data(pb) -> dict:
     return {"joint_ab": np.array([(j[0], j[1]) for j in pb.joints], dtype=np.int64).reshape(nj, 2),
             "joint_q": np.array([j[3] for j in pb.joints], dtype=float).reshape(nj, 3, 3),
             "Y": c64(Y), "Sinv": c64(Sinv), "keep": np.zeros((10, 3)), "jr": np.zeros(3 * nj),
-            "body_row": np.array([r for r, _, _ in pb.bodies], dtype=np.int64),
-            "body_J": c64(np.array([b.inertia for _, _, b in pb.bodies], dtype=float).reshape(-1, 3)),
-            **_hinge_data(pb)}
+            **_body_data(pb), **_hinge_data(pb)}
+
+
+def _body_data(pb) -> dict:
+    """The end bodies' fields of :class:`GalerkinData` and those of their mass coupling."""
+    bs, cp, n = pb.bodies, pb._coupling, pb.n
+    k = len(cp.index) if cp is not None else 0
+    return {"body_row": np.array([b.row for b in bs], dtype=np.int64),
+            "body_pt": np.array([b.point for b in bs], dtype=np.int64),
+            "body_m": c64([b.body.mass for b in bs]), "body_c": c64(np.array([b.c for b in bs]).reshape(-1, 3)),
+            "body_J": c64(np.array([b.J for b in bs]).reshape(-1, 3, 3)),
+            "body_wt": c64(np.array([b.weight for b in bs]).reshape(-1, 3)),
+            "cpl_index": np.array(cp.index if cp is not None else (), dtype=np.int64),
+            "cpl_P": c64(cp.P if cp is not None else np.zeros((0, n, 3))),
+            "cpl_G": c64(cp.G if cp is not None else np.zeros((0, 0))),
+            "cpl_C": np.zeros((6 * k, 6 * k)), "cpl_S": np.zeros((6 * k, 6 * k + 2))}
 
 
 def _hinge_data(pb) -> dict:
