@@ -89,7 +89,7 @@ def run_buckle(scene: Scene, out_dir: Path, n: int = 3, steps: int = 10, refine:
         "scene": scene.name, "source": scene.source, "version": __version__, "command": "buckle",
         "discretization": {"formulation": pb.formulation, "degree": scene["space.degree"],
                            "n_ctrl": scene["space.n_ctrl"], "length": pb.space.length},
-        "load_time": t, "load_steps": steps, "refine": refine, "refined": res.refined, "note": res.note,
+        "load_time": t, "load_steps": steps, "refine": refine, "refined": res.refined, "accuracy": res.accuracy, "note": res.note,
         "at_load_factor": res.at_factor, "refinement_history": res.history, "equilibria": res.iterations + 1,
         "newton_iterations": res.newton, "singularity": res.singularity,
         "applied_loads": {k: v.tolist() for k, v in loads.items()},
@@ -100,7 +100,8 @@ def run_buckle(scene: Scene, out_dir: Path, n: int = 3, steps: int = 10, refine:
 
 
 def _print(scene: Scene, s: dict, out: Path) -> None:
-    how = ("lowest refined along the load path" if s["refined"] else
+    floor = f" to {s['accuracy']:.1g}, the tangents' round-off" if s.get("accuracy") else ""
+    how = (f"lowest refined along the load path{floor}" if s["refined"] else
            "linear buckling" if not s["refine"] else f"refinement incomplete: {s['note']}")
     print(f"{scene.name}: {len(s['modes'])} lowest critical load factors ({how}; {s['equilibria']} equilibria, "
           f"{s['newton_iterations']} Newton iterations, {s['cpu_time_s']:.3g} s CPU; loads at t = "

@@ -24,7 +24,8 @@ singular.
    secant of the tangent along the load path) predicts ``lambda_{j+1} = lambda_j + mu``;
    the equilibrium is followed there in load steps of at most ``1 / load_steps`` and the
    prediction repeated until it moves by less than ``rtol`` (a secant iteration on the
-   singularity of ``K`` along the path: superlinear). Beyond a limit point the static
+   singularity of ``K`` along the path: superlinear), or until the last predictions agree
+   to the tangents' round-off (:data:`FLOOR_BAND`; ``BucklingResult.accuracy``). Beyond a limit point the static
    solver finds no equilibrium: the step is halved, and after :data:`HALVINGS` halvings the
    refinement stops at the last equilibrium (``BucklingResult.note`` says so).
 
@@ -97,6 +98,27 @@ HALVINGS = 5
 SINGULAR = 1e-4
 
 
+#: The refinement's predictions have reached the tangents' round-off when the last
+#: :data:`FLOOR_COUNT` of them and the equilibrium of the last lie within this relative band
+#: without converging to ``rtol``
+#: (the secant over steps that short divides the central differences' noise by the step:
+#: Argyris' frame at n_ctrl 21 jitters by 1e-6 about its critical load).
+FLOOR_BAND = 1e-5
+FLOOR_COUNT = 3
+
+
+def _noise_floor(history: list, factor: float, lam: float) -> float:
+    """The relative spread of the last :data:`FLOOR_COUNT` refined predictions and the
+    equilibrium ``lam`` they were made at, if it is within :data:`FLOOR_BAND` (the
+    refinement has reached the tangents' round-off), else 0. The linear prediction
+    (``history[0]``) does not count."""
+    last = history[1:][-FLOOR_COUNT:]
+    if len(last) < FLOOR_COUNT:
+        return 0.0
+    spread = (max(last + [lam]) - min(last + [lam])) / abs(factor)
+    return spread if spread <= FLOOR_BAND else 0.0
+
+
 def _stiffness_ratio(K: np.ndarray, K0: np.ndarray, phi: np.ndarray) -> float:
     """``|phi.K phi| / |phi.K0 phi|``: the stiffness of the mode ``phi`` under the load
     (``K``) relative to its stiffness unloaded (``K0``)."""
@@ -135,6 +157,9 @@ class BucklingResult:
         Newton iterations in all.
     note : str
         Why the refinement stopped early ("" when refined or not asked).
+    accuracy : float
+        The relative spread of the last refined predictions when the refinement stopped at
+        the tangents' round-off before reaching ``rtol`` (:func:`_noise_floor`), else 0.
     """
 
     load_factors: np.ndarray
@@ -149,6 +174,7 @@ class BucklingResult:
     note: str = ""
     singularity: float = float("nan")
     history: list = field(default_factory=list)
+    accuracy: float = 0.0
 
 
 def critical_factors(K: np.ndarray, KG: np.ndarray, base: float, n: int, rtol_imag: float = 1e-6):
@@ -233,7 +259,10 @@ def _refine(problem, res: BucklingResult, prev, cur, n, t, load_steps, rtol, max
             return
         res.load_factors, res.vectors, res.state, res.at_factor = factors, [expand(v) for v in phi.T], y, lam
         res.history.append(float(factors[0]))
-        if abs(factors[0] - lam) <= rtol * abs(factors[0]):
+        floor = _noise_floor(res.history, factors[0], lam)
+        if abs(factors[0] - lam) <= rtol * abs(factors[0]) or floor:
+            if floor:
+                res.accuracy = floor
             _higher_factors(res, K, K0, lam, n, expand)
             res.singularity = _stiffness_ratio(K, K0, phi[:, 0])
             res.refined = res.singularity <= SINGULAR
