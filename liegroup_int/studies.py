@@ -785,9 +785,9 @@ def _positive_errors(table: Sequence[Mapping]) -> list[Mapping]:
 
 def plot_convergence(table: Sequence[Mapping], path: Path) -> Path:
     """Error against the varied parameter (log-log), with the fitted slope if >= 3 points."""
-    from .io.plots import _pyplot
+    from .io.plots import _figures
 
-    plt = _pyplot()
+    plt = _figures()
     used = _positive_errors(table)
     x = np.array([t["value"] for t in used])
     e = np.array([t["error"] for t in used])
@@ -816,9 +816,9 @@ def plot_convergence(table: Sequence[Mapping], path: Path) -> Path:
 
 def plot_work_precision(table: Sequence[Mapping], path: Path) -> Path:
     """Error against wall time (log-log), one point per run, labelled by the parameter."""
-    from .io.plots import _pyplot
+    from .io.plots import _figures
 
-    plt = _pyplot()
+    plt = _figures()
     used = [t for t in _positive_errors(table) if t.get("wall_time_s")]
     fig, ax = plt.subplots(figsize=(6, 4.5))
     wall, err = [t["wall_time_s"] for t in used], [t["error"] for t in used]

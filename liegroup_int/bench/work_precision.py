@@ -694,15 +694,14 @@ def plot(result: Result, path: Path) -> Path:
     PyElastica in black.
     Right: the time study, time error against CPU time per method (the paper's Fig. 4(b),
     5(b))."""
-    import matplotlib
+    from ..io.plots import _figures
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _figures()
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 6.8))
     ok = [r for r in result.ours if r.status == "ok" and np.isfinite(r.error) and r.error > 0]
     families = sorted({r.family for r in result.ours})
-    colors = {f: plt.cm.tab10(i % 10) for i, f in enumerate(families)}
+    colors = {f: plt.get_cmap("tab10")(i % 10) for i, f in enumerate(families)}
     markers = dict(zip(sorted({r.resolution for r in result.ours}), "osD^v<>p*hPX"))
     forms = list(dict.fromkeys(r.formulation for r in result.ours))
     # line style, marker face (None: filled)

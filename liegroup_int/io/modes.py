@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .paraview import write_beam_vtu, write_pvd
-from .plots import _pyplot, save_figure
+from .plots import _figures, save_figure
 
 #: Names of the displacement and rotation components, for the dominant-component label.
 _COMPONENTS = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
@@ -105,7 +105,7 @@ def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = 
     displacement a tenth of the curve's extent), in the plane of the curve's longest extent
     and the mode's largest displacement across it; torsional modes show their rotation
     amplitude along the curve."""
-    plt = _pyplot()
+    plt = _figures()
     k = min(n_max, len(shapes))
     cols = min(3, k)
     rows = (k + cols - 1) // cols
