@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..iga import CollocationSpace, NurbsCurve, arc_length, arc_nurbs_quadratic, helix_quarter, k_refine, straight
@@ -170,8 +172,10 @@ KEYS = {
             "[geometry]"),
         Key("joints", "tables", (), "[[joints]] entries: joints between any member ends instead of the chain (T and "
             "X junctions, closed rings, trees; galerkin): ends, the coinciding member ends joined at one point "
-            "(\"<name>.start\" or \"<name>.end\" of named [[beams]] entries, two or more; each end in one joint "
-            "at most, and not a supported end: support a frame through an end of its own), and kind: rigid (equal "
+            "(\"<name>.start\" or \"<name>.end\" of named [[beams]] entries, or \"<name>@<fraction>\", an interior "
+            "point of a member at that fraction of its length, where the member stays continuous; two or more; "
+            "each end in one joint at most, and not a supported end: support a frame through an end of its own), "
+            "and kind: rigid (equal "
             "position and rotation, the default), ball (equal position, rotations free: no couple transmitted) "
             "or hinge (equal position, relative rotation about axis only: no couple about the axis but that of "
             "its rotational spring and damper, stiffness and damping)"),
@@ -276,7 +280,9 @@ PROFILE_KEYS = {
 }
 #: Keys of one ``[[joints]]`` entry.
 JOINT_KEYS = {
-    "ends": Key("ends", "strs", (), "the joined member ends, \"<name>.start\" or \"<name>.end\" (two or more)"),
+    "ends": Key("ends", "strs", (), "the joined member ends, \"<name>.start\" or \"<name>.end\", or interior "
+                "points, \"<name>@<fraction>\" (the fraction of the member's length, in (0, 1): the member stays "
+                "continuous there); two or more"),
     "kind": Key("kind", "str", "rigid", "rigid (position and rotation), ball (position only) or hinge "
                 "(position, and rotation but for a turn about the axis)", choices=JOINT_KINDS),
     "axis": Key("axis", "vec3", ZERO, "hinge axis (spatial, reference configuration; kind = \"hinge\" only)"),
@@ -397,28 +403,32 @@ def _point_load_list(scene: Scene) -> list:
     return loads
 
 
-def _split_pieces(scene: Scene, frame: dict, s: float, i: int, load: EndLoad) -> None:
+def _split_pieces(scene: Scene, frame: dict, s: float, what: str, load: EndLoad | None) -> None:
     """Split the piece of ``frame`` (lists ``pieces, sections, spaces, members,
-    joint_loads``) where the point load ``i`` acts at the fraction ``s``, or put the load on
-    the joint there."""
+    joint_loads``) at the fraction ``s`` of the total length, where the point load ``load``
+    acts (``what``: ``"point_loads[i]"``) or a joint takes an interior point of a member
+    (``load`` None, ``what``: ``"joints[i]"``); at an existing piece end a load goes on the
+    joint there."""
     p, spaces, joint_loads = scene["space.degree"], frame["spaces"], frame["joint_loads"]
     edges = np.concatenate([[0.0], np.cumsum([sp.length for sp in spaces])])
     edges /= edges[-1]
     at = int(np.argmin(np.abs(edges - s)))
     if abs(edges[at] - s) <= 1e-9:  # at a joint
         if scene["joints"] and frame["members"][at - 1] != frame["members"][at]:
-            raise SceneError(f"{scene.source}: point_loads[{i}]: s = {s!r} is a member end; with [[joints]] a "
-                             "point load acts inside a member")
-        if joint_loads[at - 1] is not None:
-            raise SceneError(f"{scene.source}: point_loads[{i}]: another point load acts at s = {s!r}")
-        joint_loads[at - 1] = load
+            raise SceneError(f"{scene.source}: {what}: s = {s!r} is a member end; with [[joints]] a "
+                             + ("point load acts inside a member" if load is not None else
+                                "joint names it \"<member>.start\" or \"<member>.end\""))
+        if load is not None and joint_loads[at - 1] is not None:
+            raise SceneError(f"{scene.source}: {what}: another point load acts at s = {s!r}")
+        if load is not None:
+            joint_loads[at - 1] = load
         return
     k = int(np.searchsorted(edges, s) - 1)
     get, pre, _, n, exact = frame["pieces"][k]
     exact = exact if exact is not None else _exact_base(scene, get, pre)
     if exact is None:
-        raise SceneError(f"{scene.source}: point_loads[{i}]: a point load inside a helix beam is not supported; "
-                         "describe the helix as a NURBS (kind = nurbs)")
+        raise SceneError(f"{scene.source}: {what}: a {'point load' if load is not None else 'joint'} inside a helix "
+                         "beam is not supported; describe the helix as a NURBS (kind = nurbs)")
     frac = (s - edges[k]) / (edges[k + 1] - edges[k])
     left, right = _split_at(exact, frac)
     n_left = max(p + 1, int(round(frac * (n - 1))) + 1)
@@ -447,8 +457,10 @@ def frame_space(scene: Scene):
         return _space(scene, get, pre, curve), (), frame["sections"][0]
     frame["spaces"] = [_space(scene, get, pre, c) for get, pre, c, _, _ in frame["pieces"]]
     frame["joint_loads"] = [None] * (len(beams) - 1)
+    for s, what in _interior_joint_points(scene, frame):
+        _split_pieces(scene, frame, s, what, None)
     for s, i, load in loads:
-        _split_pieces(scene, frame, s, i, load)
+        _split_pieces(scene, frame, s, f"point_loads[{i}]", load)
     joint_loads, graph = frame["joint_loads"], {}
     if scene["joints"]:
         pairs, kinds, axes, springs, joint_loads = _graph(scene, frame)
@@ -467,6 +479,61 @@ def frame_space(scene: Scene):
     return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads), sections
 
 
+def _interior_point(where: str, end: str, names: list) -> tuple[int, float] | None:
+    """``(member, fraction)`` of a joint end ``"<name>@<fraction>"`` (an interior point of
+    a member, the fraction of its length in (0, 1)), or None for a member end."""
+    if "@" not in end:
+        return None
+    name, _, frac = end.rpartition("@")
+    if name not in names:
+        raise SceneError(f"{where}: key 'ends': {end!r}: no [[beams]] entry named {name!r} (members: "
+                         f"{', '.join(names)})")
+    try:
+        f = float(frac)
+    except ValueError:
+        f = math.nan
+    if not 0.0 < f < 1.0:
+        raise SceneError(f"{where}: key 'ends': {end!r}: expected \"<member>@<fraction>\" with a fraction of the "
+                         "member's length strictly between 0 and 1 (its ends are \"<member>.start\" and "
+                         "\"<member>.end\")")
+    return names.index(name), f
+
+
+def _canonical_end(where: str, end: str, names: list) -> str:
+    """``end`` with an interior point's fraction written as a float (``"a@0.50"`` and
+    ``"a@0.5"`` are one point)."""
+    point = _interior_point(where, end, names)
+    return end if point is None else f"{names[point[0]]}@{point[1]!r}"
+
+
+def _member_fractions(frame: dict, m: int) -> tuple[list, np.ndarray]:
+    """The pieces of member ``m`` and the fractions of its length where they end."""
+    pieces = [k for k, mm in enumerate(frame["members"]) if mm == m]
+    lengths = np.array([frame["spaces"][k].length for k in pieces])
+    return pieces, np.cumsum(lengths) / lengths.sum()
+
+
+def _interior_joint_points(scene: Scene, frame: dict) -> list:
+    """``[(s, "joints[i]")]``: the interior member points that ``[[joints]]`` entries name
+    (:func:`_interior_point`), as fractions ``s`` of the total length, where the member is
+    split (its pieces joined rigidly) so that the joint takes a piece end there."""
+    if not scene["joints"]:
+        return []
+    names, out = _member_names(scene), []
+    total = sum(sp.length for sp in frame["spaces"])
+    for i, entry in enumerate(scene["joints"]):
+        where = f"{scene.source}: joints[{i}]"
+        for end in resolve_keys(JOINT_KEYS, entry, where)["ends"]:
+            point = _interior_point(where, end, names)
+            if point is not None:
+                m, f = point
+                pieces, _ = _member_fractions(frame, m)
+                start = sum(sp.length for sp in frame["spaces"][:pieces[0]])
+                length = sum(frame["spaces"][k].length for k in pieces)
+                out.append(((start + f * length) / total, f"joints[{i}]"))
+    return out
+
+
 def _member_names(scene: Scene) -> list:
     """Names of the ``[[beams]]`` entries, checked distinct and given (``[[joints]]``)."""
     if not scene["beams"]:
@@ -480,42 +547,77 @@ def _member_names(scene: Scene) -> list:
 
 
 def _graph(scene: Scene, frame: dict) -> tuple:
-    """Joint pairs ``((piece, side), (piece, side))``, their kinds, hinge axes, springs and point loads: the
-    pieces of each split member in a rigid chain, and each ``[[joints]]`` entry's ends
-    joined to its first end (one-line errors naming the entry and key)."""
-    names, members, spaces = _member_names(scene), frame["members"], frame["spaces"]
-    pairs, kinds, axes, springs, loads = [], [], [], [], []
-    for k in range(len(members) - 1):
-        if members[k] == members[k + 1]:
-            pairs.append(((k, "end"), (k + 1, "start")))
-            kinds.append("rigid")
-            axes.append(None)
-            springs.append((0.0, 0.0))
-            loads.append(frame["joint_loads"][k])
+    """Joint pairs ``((piece, side), (piece, side))``, their kinds, hinge axes, springs and
+    point loads: the pieces of each split member in a rigid chain, and each ``[[joints]]``
+    entry's ends joined to one end of it (:func:`_join`; one-line errors naming the entry
+    and key)."""
+    names, members = _member_names(scene), frame["members"]
     supported = {f"{names[0]}.start": "bc.start", f"{names[-1]}.end": "bc.end"}
     used: dict = {}
-    for i, entry in enumerate(scene["joints"]):
-        where = f"{scene.source}: joints[{i}]"
-        v = resolve_keys(JOINT_KEYS, entry, where)
-        if len(v["ends"]) < 2:
-            raise SceneError(f"{where}: key 'ends': expected two or more member ends, e.g. [\"a.end\", \"b.start\"]")
-        ends = []
-        for e in v["ends"]:
-            ends.append(_joint_end(scene, where, e, names, members, used, supported))
-            used[e] = i
-        pos = [np.asarray(spaces[k].c0[0 if side == "start" else -1]) for k, side in ends]
-        total = sum(sp.length for sp in spaces)
-        for e, x in zip(v["ends"][1:], pos[1:]):
-            gap = float(np.linalg.norm(x - pos[0]))
-            if gap > 1e-9 * total:
-                raise SceneError(f"{where}: key 'ends': {e!r} at {np.round(x, 6).tolist()} is {gap:.3g} m from "
-                                 f"{v['ends'][0]!r} at {np.round(pos[0], 6).tolist()}; joined ends must coincide")
-        pairs += [(ends[0], e) for e in ends[1:]]
-        kinds += [v["kind"]] * (len(ends) - 1)
-        axes += [_hinge_axis(where, v)] * (len(ends) - 1)
-        springs += [(v["stiffness"], v["damping"])] * (len(ends) - 1)
-        loads += [_joint_load(where, v)] + [None] * (len(ends) - 2)
-    return pairs, kinds, axes, springs, loads
+    entries = [_joint_entry(scene, frame, i, entry, names, used, supported) for i, entry in enumerate(scene["joints"])]
+    taken = {k for *_, interior in entries for k in interior}  # split points a joint takes over
+    out: tuple = ([], [], [], [], [])
+
+    def add(a, b, kind="rigid", axis=None, spring=(0.0, 0.0), load=None):
+        for lst, x in zip(out, ((a, b), kind, axis, spring, load)):
+            lst.append(x)
+
+    for k in range(len(members) - 1):
+        if members[k] == members[k + 1] and k not in taken:
+            add((k, "end"), (k + 1, "start"), load=frame["joint_loads"][k])
+    for where, v, ends, interior in entries:
+        _join(where, v, ends, interior, add, frame["joint_loads"])
+    return out
+
+
+def _joint_entry(scene: Scene, frame: dict, i: int, entry, names: list, used: dict, supported: dict) -> tuple:
+    """``(where, keys, member_ends, interior)`` of ``[[joints]]`` entry ``i``: its member ends
+    ``(piece, side)`` and, for its interior points, the piece ending there; checked to
+    coincide."""
+    where = f"{scene.source}: joints[{i}]"
+    v = resolve_keys(JOINT_KEYS, entry, where)
+    if len(v["ends"]) < 2:
+        raise SceneError(f"{where}: key 'ends': expected two or more member ends, e.g. [\"a.end\", \"b.start\"]")
+    places = []
+    for e in v["ends"]:
+        places.append(_joint_end(scene, where, e, names, frame, used, supported))
+        used[_canonical_end(where, e, names)] = i
+    spaces = frame["spaces"]
+    pos = [np.asarray(spaces[k].c0[0 if side == "start" else -1]) for k, side in places]
+    total = sum(sp.length for sp in spaces)
+    for e, x in zip(v["ends"][1:], pos[1:]):
+        gap = float(np.linalg.norm(x - pos[0]))
+        if gap > 1e-9 * total:
+            raise SceneError(f"{where}: key 'ends': {e!r} at {np.round(x, 6).tolist()} is {gap:.3g} m from "
+                             f"{v['ends'][0]!r} at {np.round(pos[0], 6).tolist()}; joined ends must coincide")
+    inside = [_interior_point(where, e, names) is not None for e in v["ends"]]
+    return (where, v, [p for p, q in zip(places, inside) if not q], [p[0] for p, q in zip(places, inside) if q])
+
+
+def _join(where: str, v: dict, ends: list, interior: list, add, joint_loads: list) -> None:
+    """The pairs of one ``[[joints]]`` entry, all from one first end (the hub): its first
+    interior point's piece end if it has one (the member's two pieces there joined
+    rigidly), else its first member end. Another interior point joins both of its pieces to
+    the hub rigidly, so only a rigid joint takes more than one; the entry's load goes on
+    one of its pairs (loads act on the hub)."""
+    kind, axis, spring, load = v["kind"], _hinge_axis(where, v), (v["stiffness"], v["damping"]), _joint_load(where, v)
+    if len(interior) > 1 and kind != "rigid":
+        raise SceneError(f"{where}: key 'kind' = {kind!r}: a {kind} joint takes one interior point (\"<member>@"
+                         "<fraction>\"); join the other members at their ends, or make the joint rigid")
+    pairs = []  # (a, b, kind, axis, spring, load)
+    if interior:
+        hub = (interior[0], "end")
+        pairs.append([hub, (interior[0] + 1, "start"), "rigid", None, (0.0, 0.0), joint_loads[interior[0]]])
+        for k in interior[1:]:
+            pairs.append([hub, (k, "end"), "rigid", None, (0.0, 0.0), joint_loads[k]])
+            pairs.append([hub, (k + 1, "start"), "rigid", None, (0.0, 0.0), None])
+    else:
+        hub, ends = ends[0], ends[1:]
+    pairs += [[hub, e, kind, axis, spring, None] for e in ends]
+    if load is not None:
+        next(p for p in pairs if p[5] is None)[5] = load
+    for p in pairs:
+        add(*p)
 
 
 def _joint_load(where: str, v: dict):
@@ -544,17 +646,25 @@ def _hinge_axis(where: str, v: dict):
     return a
 
 
-def _joint_end(scene: Scene, where: str, end: str, names: list, members: list, used: dict, supported: dict):
-    """``(piece, side)`` of a member end ``"<name>.start"`` or ``"<name>.end"``."""
+def _joint_end(scene: Scene, where: str, end: str, names: list, frame: dict, used: dict, supported: dict):
+    """``(piece, side)`` of a member end ``"<name>.start"`` or ``"<name>.end"``, or of an
+    interior point ``"<name>@<fraction>"`` (the end of the piece that ends there)."""
+    key = _canonical_end(where, end, names)
+    if key in used:
+        raise SceneError(f"{where}: key 'ends': {end!r} is already joined (joints[{used[key]}]); "
+                         "list all the ends of one point in one joint")
+    point = _interior_point(where, end, names)
+    if point is not None:
+        pieces, ends = _member_fractions(frame, point[0])
+        return pieces[int(np.argmin(np.abs(ends - point[1])))], "end"
+    members = frame["members"]
     name, _, side = end.rpartition(".")
     if side not in ("start", "end") or not name:
-        raise SceneError(f"{where}: key 'ends': {end!r}: expected \"<member>.start\" or \"<member>.end\"")
+        raise SceneError(f"{where}: key 'ends': {end!r}: expected \"<member>.start\", \"<member>.end\" or "
+                         "\"<member>@<fraction>\" (an interior point)")
     if name not in names:
         raise SceneError(f"{where}: key 'ends': {end!r}: no [[beams]] entry named {name!r} (members: "
                          f"{', '.join(names)})")
-    if end in used:
-        raise SceneError(f"{where}: key 'ends': {end!r} is already joined (joints[{used[end]}]); "
-                         "list all the ends of one point in one joint")
     bc = supported.get(end)
     if bc is not None and scene[bc] != "free":
         raise SceneError(f"{where}: key 'ends': {end!r} is supported ({bc} = {scene[bc]!r}); a joint takes free "
