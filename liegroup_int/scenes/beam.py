@@ -184,7 +184,8 @@ KEYS = {
             "t_on, t_off, ramp, table); a beam is split at s into two patches joined rigidly, where the load acts "
             "(with [[joints]]: inside a member only)"),
         Key("bodies", "tables", (), "[[bodies]] entries: rigid bodies fixed to an end of the beam (galerkin): at "
-            "(\"start\" or \"end\"), mass [kg], inertia (principal moments about the centre of mass along the end "
+            "(\"start\" or \"end\"; in a frame \"<member>.start\", \"<member>.end\" or an interior point "
+            "\"<member>@<fraction>\"), mass [kg], inertia (principal moments about the centre of mass along the end "
             "section's d1, d2, d3 [kg m^2]), offset (centre of mass from the end point, section frame [m]), force "
             "and couple on the body with a time profile (a tip mass, a hub, a payload)"),
         Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
@@ -296,8 +297,9 @@ JOINT_KEYS = {
 }
 #: Keys of one ``[[bodies]]`` entry.
 BODY_KEYS = {
-    "at": Key("at", "str", "end", "the end the body is fixed to: \"start\" or \"end\" of the beam (or chain), or "
-              "\"<member>.start\" / \"<member>.end\" of a named [[beams]] member (a frame's joint included)"),
+    "at": Key("at", "str", "end", "the end the body is fixed to: \"start\" or \"end\" of the beam (or chain), "
+              "\"<member>.start\" / \"<member>.end\" of a named [[beams]] member (a frame's joint included), or "
+              "an interior point \"<member>@<fraction>\" (the member split there, its pieces joined rigidly)"),
     "mass": Key("mass", "float", 0.0, "mass", "kg", non_negative),
     "inertia": Key("inertia", "vec3", ZERO, "principal moments of inertia about the centre of mass, along the "
                    "end section's d1, d2, d3", "kg m^2"),
@@ -452,7 +454,7 @@ def frame_space(scene: Scene):
     frame = {"pieces": [(get, pre, _curve(scene, get, pre, n), n, None) for get, pre, n, _ in beams],
              "sections": [sec for *_, sec in beams], "members": list(range(len(beams)))}
     loads = _point_load_list(scene)
-    if len(beams) == 1 and not loads and not scene["joints"]:
+    if len(beams) == 1 and not loads and not scene["joints"] and not any("@" in p for *_, p in _interior_places(scene)):
         get, pre, curve, _, _ = frame["pieces"][0]
         return _space(scene, get, pre, curve), (), frame["sections"][0]
     frame["spaces"] = [_space(scene, get, pre, c) for get, pre, c, _, _ in frame["pieces"]]
@@ -479,21 +481,22 @@ def frame_space(scene: Scene):
     return space, tuple(ld if ld is not None else EndLoad() for ld in joint_loads), sections
 
 
-def _interior_point(where: str, end: str, names: list) -> tuple[int, float] | None:
-    """``(member, fraction)`` of a joint end ``"<name>@<fraction>"`` (an interior point of
-    a member, the fraction of its length in (0, 1)), or None for a member end."""
+def _interior_point(where: str, end: str, names: list, key: str = "ends") -> tuple[int, float] | None:
+    """``(member, fraction)`` of a joint end or a body's place ``"<name>@<fraction>"`` (an
+    interior point of a member, the fraction of its length in (0, 1)), or None for a
+    member end; ``key`` names the scene key in errors."""
     if "@" not in end:
         return None
     name, _, frac = end.rpartition("@")
     if name not in names:
-        raise SceneError(f"{where}: key 'ends': {end!r}: no [[beams]] entry named {name!r} (members: "
-                         f"{', '.join(names)})")
+        raise SceneError(f"{where}: key '{key}': {end!r}: no [[beams]] entry named {name!r}"
+                         + (f" (members: {', '.join(names)})" if any(names) else ""))
     try:
         f = float(frac)
     except ValueError:
         f = math.nan
     if not 0.0 < f < 1.0:
-        raise SceneError(f"{where}: key 'ends': {end!r}: expected \"<member>@<fraction>\" with a fraction of the "
+        raise SceneError(f"{where}: key '{key}': {end!r}: expected \"<member>@<fraction>\" with a fraction of the "
                          "member's length strictly between 0 and 1 (its ends are \"<member>.start\" and "
                          "\"<member>.end\")")
     return names.index(name), f
@@ -513,31 +516,41 @@ def _member_fractions(frame: dict, m: int) -> tuple[list, np.ndarray]:
     return pieces, np.cumsum(lengths) / lengths.sum()
 
 
+def _interior_places(scene: Scene) -> list:
+    """``[(what, key, place)]``: the places ``"<name>@<fraction>"`` that ``[[joints]]``
+    entries (``ends``) and ``[[bodies]]`` entries (``at``) name, and member ends."""
+    out = [(f"joints[{i}]", "ends", e) for i, entry in enumerate(scene["joints"])
+           for e in resolve_keys(JOINT_KEYS, entry, f"{scene.source}: joints[{i}]")["ends"]]
+    return out + [(f"bodies[{i}]", "at", resolve_keys(BODY_KEYS, entry, f"{scene.source}: bodies[{i}]")["at"])
+                  for i, entry in enumerate(scene["bodies"])]
+
+
 def _interior_joint_points(scene: Scene, frame: dict) -> list:
-    """``[(s, "joints[i]")]``: the interior member points that ``[[joints]]`` entries name
-    (:func:`_interior_point`), as fractions ``s`` of the total length, where the member is
-    split (its pieces joined rigidly) so that the joint takes a piece end there."""
-    if not scene["joints"]:
+    """``[(s, "joints[i]")]``: the interior member points that ``[[joints]]`` entries and
+    ``[[bodies]]`` name (:func:`_interior_point`), as fractions ``s`` of the total length,
+    where the member is split (its pieces joined rigidly) so that a joint or a body takes a
+    piece end there."""
+    places = [p for p in _interior_places(scene) if "@" in p[2]]
+    if not places:
         return []
     names, out = _member_names(scene), []
     total = sum(sp.length for sp in frame["spaces"])
-    for i, entry in enumerate(scene["joints"]):
-        where = f"{scene.source}: joints[{i}]"
-        for end in resolve_keys(JOINT_KEYS, entry, where)["ends"]:
-            point = _interior_point(where, end, names)
-            if point is not None:
-                m, f = point
-                pieces, _ = _member_fractions(frame, m)
-                start = sum(sp.length for sp in frame["spaces"][:pieces[0]])
-                length = sum(frame["spaces"][k].length for k in pieces)
-                out.append(((start + f * length) / total, f"joints[{i}]"))
+    for what, key, place in places:
+        m, f = _interior_point(f"{scene.source}: {what}", place, names, key)
+        pieces, _ = _member_fractions(frame, m)
+        start = sum(sp.length for sp in frame["spaces"][:pieces[0]])
+        length = sum(frame["spaces"][k].length for k in pieces)
+        out.append(((start + f * length) / total, what))
     return out
 
 
 def _member_names(scene: Scene) -> list:
-    """Names of the ``[[beams]]`` entries, checked distinct and given (``[[joints]]``)."""
+    """Names of the ``[[beams]]`` entries, checked distinct and given (``[[joints]]``,
+    interior points)."""
     if not scene["beams"]:
-        raise SceneError(f"{scene.source}: key 'joints': joins members of [[beams]]; give the frame's members there")
+        what = "joints" if scene["joints"] else "bodies"
+        raise SceneError(f"{scene.source}: key '{what}': {what} at members' ends or interior points need the frame's "
+                         "members in [[beams]]")
     names = [str(flatten(e).get("name", "")) for e in scene["beams"]]
     for i, name in enumerate(names):
         if not name or names.index(name) != i:
@@ -1044,10 +1057,16 @@ def _body_end(scene: Scene, where: str, at: str, space) -> tuple[str, int]:
     """``(side, patch)`` of a body's ``at``: the beam's own end (patch -1) or a member's."""
     if at in ("start", "end"):
         return at, -1
+    if "@" in at:  # an interior point: the end of the piece ending there (the member is split there)
+        names = [str(flatten(e).get("name", "")) for e in scene["beams"]]
+        m, f = _interior_point(where, at, names, "at")
+        pieces = [k for k, mm in enumerate(getattr(space, "members", ())) if mm == m]
+        ends = np.cumsum([space.patches[k].length for k in pieces])
+        return "end", pieces[int(np.argmin(np.abs(ends / ends[-1] - f)))]
     name, _, side = at.rpartition(".")
     if side not in ("start", "end") or not name:
-        raise SceneError(f"{where}: key 'at' = {at!r}: expected \"start\", \"end\" or \"<member>.start\" / "
-                         "\"<member>.end\"")
+        raise SceneError(f"{where}: key 'at' = {at!r}: expected \"start\", \"end\", \"<member>.start\" / "
+                         "\"<member>.end\" or \"<member>@<fraction>\" (an interior point)")
     names = [str(flatten(e).get("name", "")) for e in scene["beams"]]
     if name not in names:
         raise SceneError(f"{where}: key 'at' = {at!r}: no [[beams]] entry named {name!r}"
