@@ -102,8 +102,10 @@ def normalized(disp: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = "", n_max: int = 6) -> Path:
     """The first ``n_max`` mode shapes: the reference curve and the displaced one (largest
-    displacement a tenth of the curve's extent), in the plane of the curve's longest extent
-    and the mode's largest displacement across it; torsional modes show their rotation
+    displacement a tenth of the curve's extent). A straight or plane curve moving in its
+    plane, or straight and moving across it, is drawn in the plane of its longest extent and
+    the mode's largest displacement across it; a plane frame moving out of its plane (a
+    lateral buckling mode), or a space curve, in 3D. Torsional modes show their rotation
     amplitude along the curve."""
     plt = _figures()
     k = min(n_max, len(shapes))
@@ -115,23 +117,63 @@ def plot_modes(path: Path, shapes: list[tuple], labels: list[str], title: str = 
     for ax, (points, disp, rot), label in zip(axes.ravel(), shapes[:k], labels[:k]):
         extent = float(np.max(np.ptp(points, axis=0))) or 1.0
         dmax = float(np.max(np.linalg.norm(disp, axis=1)))
-        if dmax > 1e-9 * float(np.max(np.linalg.norm(rot, axis=1)) * extent + 1e-300):
-            ext = np.ptp(points, axis=0)
-            a = int(np.argmax(ext))
-            across = np.max(np.abs(disp), axis=0) + 1e-9 * ext
-            across[a] = -1.0
-            b = int(np.argmax(across))
-            if np.max(np.abs(disp[:, b])) < 1e-3 * np.max(np.abs(disp[:, a])):  # an axial mode
-                b = int(np.argsort(ext)[-2])
-            moved = points + 0.1 * extent / dmax * disp
-            ax.plot(points[:, a], points[:, b], color="0.6", lw=1, label="reference")
-            ax.plot(moved[:, a], moved[:, b], color="C0", lw=1.5, label="mode")
-            ax.set_xlabel(f"x{a + 1} [m]", fontsize=8), ax.set_ylabel(f"x{b + 1} [m]", fontsize=8)
-            ax.set_aspect("equal", adjustable="datalim")
+        if dmax <= 1e-9 * float(np.max(np.linalg.norm(rot, axis=1)) * extent + 1e-300):
+            _plot_rotation(ax, points, rot)
+        elif _needs_3d(points, disp):
+            ax = _plot_3d(fig, ax, points, points + 0.1 * extent / dmax * disp)
         else:
-            s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
-            ax.plot(s, rot, lw=1.2)
-            ax.set_xlabel("s [m]", fontsize=8), ax.set_ylabel("rotation [-]", fontsize=8)
+            _plot_planar(ax, points, disp, points + 0.1 * extent / dmax * disp)
         ax.set_title(label, fontsize=9)
         ax.grid(alpha=0.3)
     return save_figure(fig, path, title, hspace=0.55, wspace=0.4)
+
+
+def _needs_3d(points: np.ndarray, disp: np.ndarray) -> bool:
+    """The curve spans two or three axes (the second-longest extent over a tenth of the
+    longest) and the mode moves along the third by more than a tenth of its largest
+    displacement, or the curve spans all three axes."""
+    ext = np.ptp(points, axis=0)
+    order = np.argsort(ext)
+    if ext[order[1]] <= 0.1 * ext[order[2]]:
+        return False
+    return bool(ext[order[0]] > 0.1 * ext[order[2]] or
+                np.max(np.abs(disp[:, order[0]])) > 0.1 * np.max(np.abs(disp)))
+
+
+def _plot_planar(ax, points: np.ndarray, disp: np.ndarray, moved: np.ndarray) -> None:
+    """Reference and mode in the plane of the curve's longest extent and the mode's largest
+    displacement across it (the second-longest extent for an axial mode)."""
+    ext = np.ptp(points, axis=0)
+    a = int(np.argmax(ext))
+    across = np.max(np.abs(disp), axis=0) + 1e-9 * ext
+    across[a] = -1.0
+    b = int(np.argmax(across))
+    if np.max(np.abs(disp[:, b])) < 1e-3 * np.max(np.abs(disp[:, a])):  # an axial mode
+        b = int(np.argsort(ext)[-2])
+    ax.plot(points[:, a], points[:, b], color="0.6", lw=1, label="reference")
+    ax.plot(moved[:, a], moved[:, b], color="C0", lw=1.5, label="mode")
+    ax.set_xlabel(f"x{a + 1} [m]", fontsize=8), ax.set_ylabel(f"x{b + 1} [m]", fontsize=8)
+    ax.set_aspect("equal", adjustable="datalim")
+
+
+def _plot_3d(fig, ax, points: np.ndarray, moved: np.ndarray):
+    """Reference and mode on a 3D axes in the place of ``ax`` (returned), to scale but for an
+    axis shorter than 0.4 of the longest, drawn at that length."""
+    spec = ax.get_subplotspec()
+    ax.remove()
+    ax = fig.add_subplot(spec, projection="3d")
+    ax.plot(*points.T, color="0.6", lw=1, label="reference")
+    ax.plot(*moved.T, color="C0", lw=1.5, label="mode")
+    both = np.vstack([points, moved])
+    ax.set_box_aspect(np.maximum(np.ptp(both, axis=0), 0.4 * np.max(np.ptp(both, axis=0))))  # a flat axis stays readable
+    for setter, name in ((ax.set_xlabel, "x1"), (ax.set_ylabel, "x2"), (ax.set_zlabel, "x3")):
+        setter(f"{name} [m]", fontsize=7)
+    ax.tick_params(labelsize=6)
+    return ax
+
+
+def _plot_rotation(ax, points: np.ndarray, rot: np.ndarray) -> None:
+    """A torsional mode: its rotation amplitude along the curve."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    ax.plot(s, rot, lw=1.2)
+    ax.set_xlabel("s [m]", fontsize=8), ax.set_ylabel("rotation [-]", fontsize=8)
