@@ -112,7 +112,8 @@ def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "", en
 
 def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int = 6, title: str = "") -> Path:
     """Deformed centrelines at ``n_shapes`` times spread over the run, in 3-D and in
-    the two projections with the largest extent.
+    the two projections with the largest extent; a motion that stays in a coordinate plane
+    (its extent across it below 1e-9 of the largest) in that plane only.
 
     Parameters
     ----------
@@ -127,16 +128,20 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     flat = shapes.reshape(-1, 3)
     ext = np.nanmax(flat, axis=0) - np.nanmin(flat, axis=0)
     a, b = sorted(np.argsort(ext)[-2:])
-    fig = plt.figure(figsize=(11, 4.5))
-    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-    ax2 = fig.add_subplot(1, 2, 2)
+    planar = bool(np.min(ext) <= 1e-9 * np.max(ext))
+    fig = plt.figure(figsize=(7, 4.5) if planar else (11, 4.5))
+    ax3 = None if planar else fig.add_subplot(1, 2, 1, projection="3d")
+    ax2 = fig.add_subplot(1, 1, 1) if planar else fig.add_subplot(1, 2, 2)
     cmap = plt.get_cmap("viridis")
     for j, (i, p) in enumerate(zip(idx, pts)):
         col = cmap(j / max(1, len(idx) - 1))
-        ax3.plot(p[:, 0], p[:, 1], p[:, 2], color=col, label=f"t = {times[i]:.4g} s")
-        ax2.plot(p[:, a], p[:, b], color=col)
-    ax3.set_xlabel("x1"), ax3.set_ylabel("x2"), ax3.set_zlabel("x3")
-    ax3.legend(fontsize=7, loc="upper left")
+        label = f"t = {times[i]:.4g} s"
+        if ax3 is not None:
+            ax3.plot(p[:, 0], p[:, 1], p[:, 2], color=col, label=label)
+        ax2.plot(p[:, a], p[:, b], color=col, label=label)
+    (ax3 or ax2).legend(fontsize=7, loc="upper left" if ax3 else "best")
+    if ax3 is not None:
+        ax3.set_xlabel("x1"), ax3.set_ylabel("x2"), ax3.set_zlabel("x3")
     ax2.set_xlabel(f"x{a + 1} [m]"), ax2.set_ylabel(f"x{b + 1} [m]")
     ax2.set_aspect("equal", adjustable="datalim")
     ax2.grid(alpha=0.3)

@@ -298,7 +298,7 @@ def common_keys(kind: ProblemKind) -> dict[str, Key]:
             + _STRIDE_RULE, "s", positive),
         Key("output.snapshot_every", "float", None, "simulated time between state snapshots in results.h5, which "
             "shapes.png and `plot --times` draw (default t_end/100); " + _STRIDE_RULE, "s", positive),
-        Key("output.plots", "bool", True, "draw history.png (and shapes.png) after the run (about 1 s; `--no-plots`)"),
+        Key("output.plots", "bool", True, "draw history.png (and shapes.png) after the run (about 0.5 s; `--no-plots`)"),
         Key("output.checkpoint_every", "float", 60.0, "wall-clock seconds between checkpoints (0: only at the end and on SIGINT/SIGTERM)", "s", non_negative),
         Key("events", "tables", (), "[[events]] entries: quantity (a history column of a recorded quantity, e.g. "
             "tip_z), value (default 0), direction (falling, rising, both), terminal (stop the run at the first), "
