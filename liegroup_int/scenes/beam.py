@@ -1033,7 +1033,9 @@ class ShapeRecorder:
         u = np.linspace(0.0, 1.0, self.n_points)
         line = np.einsum("uj,mjk->muk", self.space.point_matrix(u), ctrl)
         if not getattr(self.space, "chain", True):  # members apart: a NaN point between them
-            member = np.searchsorted(self.space._u_edges[1:-1], u, side="right")
+            patch = np.searchsorted(self.space._u_edges[1:-1], u, side="right")
+            members = getattr(self.space, "members", None)  # the pieces of a split member stay one line
+            member = np.asarray(members)[patch] if members is not None else patch
             line = np.insert(line, np.flatnonzero(np.diff(member)) + 1, np.nan, axis=1)
         return {"t": np.asarray(t), "control_points": ctrl, "u": u, "centreline": line}
 
