@@ -459,7 +459,7 @@ def frame_space(scene: Scene):
         return _space(scene, get, pre, curve), (), frame["sections"][0]
     frame["spaces"] = [_space(scene, get, pre, c) for get, pre, c, _, _ in frame["pieces"]]
     frame["joint_loads"] = [None] * (len(beams) - 1)
-    for s, what in _interior_joint_points(scene, frame):
+    for s, what in _interior_split_points(scene, frame):
         _split_pieces(scene, frame, s, what, None)
     for s, i, load in loads:
         _split_pieces(scene, frame, s, f"point_loads[{i}]", load)
@@ -517,17 +517,19 @@ def _member_fractions(frame: dict, m: int) -> tuple[list, np.ndarray]:
 
 
 def _interior_places(scene: Scene) -> list:
-    """``[(what, key, place)]``: the places ``"<name>@<fraction>"`` that ``[[joints]]``
-    entries (``ends``) and ``[[bodies]]`` entries (``at``) name, and member ends."""
+    """``[(what, key, place)]``: every place that ``[[joints]]`` entries (``ends``) and
+    ``[[bodies]]`` entries (``at``) name, member ends and interior points
+    ``"<name>@<fraction>"`` alike."""
     out = [(f"joints[{i}]", "ends", e) for i, entry in enumerate(scene["joints"])
            for e in resolve_keys(JOINT_KEYS, entry, f"{scene.source}: joints[{i}]")["ends"]]
     return out + [(f"bodies[{i}]", "at", resolve_keys(BODY_KEYS, entry, f"{scene.source}: bodies[{i}]")["at"])
                   for i, entry in enumerate(scene["bodies"])]
 
 
-def _interior_joint_points(scene: Scene, frame: dict) -> list:
-    """``[(s, "joints[i]")]``: the interior member points that ``[[joints]]`` entries and
-    ``[[bodies]]`` name (:func:`_interior_point`), as fractions ``s`` of the total length,
+def _interior_split_points(scene: Scene, frame: dict) -> list:
+    """``[(s, what)]`` (``what``: ``"joints[i]"`` or ``"bodies[i]"``): the interior member
+    points that ``[[joints]]`` and ``[[bodies]]`` entries name (:func:`_interior_point`),
+    as fractions ``s`` of the total length,
     where the member is split (its pieces joined rigidly) so that a joint or a body takes a
     piece end there."""
     places = [p for p in _interior_places(scene) if "@" in p[2]]
