@@ -417,9 +417,11 @@ def _split_pieces(scene: Scene, frame: dict, s: float, what: str, load: EndLoad 
     at = int(np.argmin(np.abs(edges - s)))
     if abs(edges[at] - s) <= 1e-9:  # at a joint
         if scene["joints"] and frame["members"][at - 1] != frame["members"][at]:
-            raise SceneError(f"{scene.source}: {what}: s = {s!r} is a member end; with [[joints]] a "
-                             + ("point load acts inside a member" if load is not None else
-                                "joint names it \"<member>.start\" or \"<member>.end\""))
+            if load is not None:
+                raise SceneError(f"{scene.source}: {what}: s = {s!r} is a member end; with [[joints]] a point load "
+                                 "acts inside a member")
+            raise SceneError(f"{scene.source}: {what}: the point at {s:.6g} of the total length is a member's end, "
+                             "not an interior point: name it \"<member>.start\" or \"<member>.end\"")
         if load is not None and joint_loads[at - 1] is not None:
             raise SceneError(f"{scene.source}: {what}: another point load acts at s = {s!r}")
         if load is not None:

@@ -126,6 +126,7 @@ def test_a_mass_at_mid_span_matches_the_frequency_equation(mass_ratio, tmp_path)
     ref = bl**2 / (2 * np.pi * l**2) * np.sqrt(ei / rho_a)
     text = (builtin_path("cantilever").read_text().replace("[geometry]", "[[beams]]\nname = \"span\"")
             .replace("direction = [1.0, 0.0, 0.0]", "direction = [1.0, 0.0, 0.0]\nn_ctrl = 41"))
+    assert "[[beams]]" in text and "n_ctrl = 41" in text  # the cantilever made a one-member frame
     (tmp_path / "span.toml").write_text(text)
     sc = load_scene(tmp_path / "span.toml", {"section.t": t, "loads.end.force": [0.0, 0.0, 0.0], "bc.end": "clamped",
                                              "bodies": [{"at": "span@0.5", "mass": M}]})
