@@ -35,7 +35,7 @@ from .adapters import F1, F2, F3, I1, c64
 from .band import basis_windows, factor_mc, forward_row, solve_cols, window, window2, window3
 from .physics import (dexpinv, dissipation, exp_rows, gamma_rate, gyroscopic, jr_times, jr_times_s,
                       load_power, point_load, resultant, strain)
-from .profiles import LoadTable, set_loads
+from .profiles import LoadTable
 from .vec3 import (add, axpy, cross, div, dot, inertia, norm, put, put_at, rot, rot_T, row, scale, sub,
                    sym_add, sym_solve, sym_times)
 
@@ -102,7 +102,7 @@ class CollocationData(NamedTuple):
     tmp: F2  # (n, 12) work of the dense solve, or (0, 12)
 
 
-@njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
+@njit(cache=True, _nrt=False, inline="always")
 def unpack(flat, head):
     """The :class:`CollocationData` of :func:`.adapters.pack`'s arrays (views)."""
     return ad.unpack_as(CollocationData, flat, head)
@@ -328,23 +328,8 @@ def call_rates_primal(c, v, w, R, K, Ks, u, out, flat, head):
     return rates_primal(c, v, w, R, K, Ks, u, out, unpack(flat, head))
 
 
-# ====================================================================== engine kernels
-# data = (CollocationData of views, load rows, load vectors, encoded profiles)
-# (ad.KernelSet.compiled_problem)
-@njit(cache=True, inline="always")
-def engine_rate(data, t, y, u, out):
-    """Stage rate at ``(t, y)`` with increment ``u`` into ``out``; returns the power."""
-    set_loads(data[0].loads, data[1], data[2], data[3], t)
-    return rates_primal(y[0], y[1], y[2], y[3], y[4], y[5], u, out, data[0])
-
-
-@njit(cache=True, inline="always")
-def engine_action(data, u, y0, y1):
-    action_primal(u, y0[0], y0[1], y0[2], y0[3], y0[4], y0[5], y1[0], y1[1], y1[2], y1[3], y1[4], y1[5], data[0])
-
-
 #: The engine's kernels of the collocation beam.
-ENGINE_KERNELS = ad.engine_kernels("beam", engine_rate, engine_action, 6)
+ENGINE_KERNELS = ad.engine_kernels("beam", 6)
 STATE_FIELDS = ("c", "v", "w", "R", "K", "K_s")
 
 

@@ -104,7 +104,7 @@ class GalerkinData(NamedTuple):
     hinge_kc: F2
 
 
-@njit(cache=True)  # not inlined: one compiled copy shared by the entries from Python (~2 s each inlined)
+@njit(cache=True, _nrt=False, inline="always")
 def unpack(flat, head):
     """The :class:`GalerkinData` of :func:`.adapters.pack`'s arrays (views)."""
     return ad.unpack_as(GalerkinData, flat, head)
@@ -477,26 +477,16 @@ def call_action(u, c, v, w, R, K, c2, v2, w2, R2, K2, flat, head):
 
 
 @njit(cache=True, _nrt=False)
-def call_rates(c, v, w, R, K, u, out, flat, head):
-    return rates(c, v, w, R, K, u, out, unpack(flat, head), True)
+def call_rates(c, v, w, R, K, u, out, flat, head, kin):
+    return rates(c, v, w, R, K, u, out, unpack(flat, head), kin)
 
 
 # ====================================================================== engine kernels
+ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", 5)
+
+
+# ====================================================================== splitting
 # data = (GalerkinData of views, load rows, load vectors, encoded profiles)
-@njit(cache=True, inline="always")
-def engine_rate(data, t, y, u, out):
-    set_loads(data[0].loads, data[1], data[2], data[3], t)
-    return rates(y[0], y[1], y[2], y[3], y[4], u, out, data[0], True)
-
-
-@njit(cache=True, inline="always")
-def engine_action(data, u, y0, y1):
-    action(u, y0[0], y0[1], y0[2], y0[3], y0[4], y1[0], y1[1], y1[2], y1[3], y1[4], data[0])
-
-
-ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", engine_rate, engine_action, 5)
-
-
 @njit(cache=True, inline="always")
 def _accelerations(data, t, y, zero, out):
     """The accelerations ``out[2], out[3]`` at ``(t, y)`` (a zero increment, without the
@@ -505,7 +495,6 @@ def _accelerations(data, t, y, zero, out):
     return rates(y[0], y[1], y[2], y[3], y[4], zero, out, data[0], False)
 
 
-# ====================================================================== splitting
 @njit(cache=True, inline="always")
 def _kick(y, acc, h):
     """Velocities ``v, W`` of ``y`` moved by ``h`` times the accelerations ``acc[2], acc[3]``."""
@@ -560,7 +549,7 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
             for j in range(m):
                 for q in range(3):
                     u[0, j, q], u[1, j, q] = hg * a[1][j, q], hg * a[2][j, q]
-            engine_action(data, u, a, b)
+            action(u, a[0], a[1], a[2], a[3], a[4], b[0], b[1], b[2], b[3], b[4], d)
             a, b, odd = b, a, not odd
             t += hg
             _accelerations(data, t, a, zero, acc)
@@ -683,7 +672,7 @@ def galerkin_data(pb):
 class NumbaGalerkinKernels(ad.KernelSet):
     """The compiled kernels of one :class:`~..galerkin.GalerkinBeamProblem`."""
 
-    data_cls, fields = GalerkinData, STATE_FIELDS
+    data_cls, fields, rate_args = GalerkinData, STATE_FIELDS, (True,)
 
     def __init__(self, pb):
         data, table = galerkin_data(pb)
