@@ -3,8 +3,10 @@
 
 Numba compiles a kernel the first time it is called and keeps the machine code in its
 on-disk cache (``__pycache__`` next to the sources, or ``NUMBA_CACHE_DIR``): only the first
-run of a kind of problem pays for it. This module does that compilation up front, one
-process per kernel set, so the sets compile side by side on a machine's cores.
+run of a kind of problem pays for it. This module does that compilation up front, in
+separate processes side by side on a machine's cores: one per kernel set, and for a beam
+set one for its stage rate (about 20 s of its 34) and one for its action and the engine's
+loop, which calls the stage rate through its address and so compiles without it.
 
 A kernel set is what one family of runs compiles: the beam's Galerkin formulation (the
 default), its primal collocation (opt-in), the rigid body, and the loops that run a user's
@@ -35,6 +37,43 @@ class KernelSet:
     overrides: tuple[str, ...]
     description: str
     warm: Callable[[], float] | None = None  # instead of a scene: a function that warms the set
+    parts: tuple[str, ...] = ()  # pieces (:data:`PARTS`) that compile side by side before the warm-up
+
+
+def _built(ks: KernelSet):
+    """``(scene, built simulation)`` of the set's scene."""
+    from .scenes import KINDS, load_scene, parse_override
+
+    scene = load_scene(ks.scene, dict(parse_override(s) for s in ks.overrides))
+    return scene, KINDS[scene.kind].build(scene)
+
+
+def _part_rates(ks: KernelSet) -> None:
+    """A beam formulation's stage rate: the entry the Python side and the engine's loops
+    call (the longest piece: about 20 s of the Galerkin set's 34)."""
+    import numpy as np
+
+    _, sim = _built(ks)
+    pb = sim.problem
+    pb.increment_rate(0.0, sim.y0, np.zeros((4, pb.n, 3)))
+
+
+def _part_loop(ks: KernelSet) -> None:
+    """A beam formulation's action and the engine's fixed-step loop, compiled without
+    running it (it calls the stage rate through its address, so it compiles without it)."""
+    import numpy as np
+
+    from .integrators import resolve_scheme
+    from .integrators.drivers import stepper_for
+
+    scene, sim = _built(ks)
+    pb = sim.problem
+    pb.action(np.zeros((4, pb.n, 3)), sim.y0)
+    stepper_for(pb, resolve_scheme(scene.integrator.method)).compile_fixed(sim.y0)
+
+
+#: The pieces a kernel set may be split into (:attr:`KernelSet.parts`).
+PARTS: dict[str, Callable[[KernelSet], None]] = {"rates": _part_rates, "loop": _part_loop}
 
 
 def warm_user_fields() -> float:
@@ -60,13 +99,14 @@ def warm_user_fields() -> float:
 #: The kernel sets: those of the built-in scenes as shipped first, then the opt-in ones.
 KERNEL_SETS: dict[str, KernelSet] = {
     "beam_galerkin": KernelSet("beam_galerkin", "cantilever", ("space.formulation=galerkin",),
-                               "beam, Galerkin (weak form, the default), fixed step (every built-in beam scene)"),
+                               "beam, Galerkin (weak form, the default), fixed step (every built-in beam scene)",
+                               parts=("rates", "loop")),
     "rigid_body": KernelSet("rigid_body", "heavy_top", (), "rigid body, fixed step (heavy_top, free_rigid_body)"),
     "beam_galerkin_adaptive": KernelSet("beam_galerkin_adaptive", "cantilever",
                                         ("space.formulation=galerkin",) + _ADAPTIVE, "beam, Galerkin, adaptive pairs"),
     "rigid_body_adaptive": KernelSet("rigid_body_adaptive", "heavy_top", _ADAPTIVE, "rigid body, adaptive pairs"),
     "beam_primal": KernelSet("beam_primal", "cantilever", ("space.formulation=primal",),
-                             "beam, primal collocation (the paper's method, opt-in), fixed step"),
+                             "beam, primal collocation (the paper's method, opt-in), fixed step", parts=("rates", "loop")),
     "beam_primal_adaptive": KernelSet("beam_primal_adaptive", "cantilever", ("space.formulation=primal",) + _ADAPTIVE,
                                       "beam, primal collocation, adaptive pairs"),
     "user_field": KernelSet("user_field", None, (), "a user's numba.njit field on the groups and Sphere(), fixed "
@@ -102,32 +142,55 @@ def _warm_set(name: str) -> tuple[str, float]:
     return name, (ks.warm() if ks.warm is not None else warm_scene(ks.scene, ks.overrides))
 
 
+def _task(name: str, part: str | None) -> tuple[str, str | None]:
+    """One piece of a set (``part``) or, with ``None``, its whole warm-up (in a worker)."""
+    if part is None:
+        _warm_set(name)
+    else:
+        PARTS[part](KERNEL_SETS[name])
+    return name, part
+
+
 def compile_sets(names, jobs: int | None = None, report=None) -> dict[str, float]:
     """Compile the kernel sets ``names`` (keys of :data:`KERNEL_SETS`) into numba's cache,
     ``jobs`` processes at a time (default: the machine's cores; 1 compiles in this
-    process). ``report(name, seconds)`` is called as each set finishes. Returns the
-    seconds per set."""
+    process, one set after the other). Side by side, a set with :attr:`~KernelSet.parts`
+    compiles its pieces in separate processes first, then warms up as a whole, which
+    loads them from the cache. ``report(name, seconds)`` is called as each set is ready.
+    Returns per set the seconds from the start until it was ready."""
     names = list(dict.fromkeys(names))
     unknown = [n for n in names if n not in KERNEL_SETS]
     if unknown:
         raise ValueError(f"unknown kernel set {unknown[0]!r}; known: {', '.join(KERNEL_SETS)}")
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(names)))
-    done: dict[str, float] = {}
+    jobs = max(1, min(jobs or os.cpu_count() or 1, sum(max(1, len(KERNEL_SETS[n].parts)) for n in names)))
+    start, done = time.perf_counter(), {}
+
+    def ready(n):
+        done[n] = time.perf_counter() - start
+        if report is not None:
+            report(n, done[n])
+
     if jobs == 1:
         for n in names:
-            done[n] = _warm_set(n)[1]
-            if report is not None:
-                report(n, done[n])
+            _warm_set(n)
+            ready(n)
         return done
     import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
+    pending = {n: set(KERNEL_SETS[n].parts) for n in names}
+    tasks = [(n, p) for n in names for p in KERNEL_SETS[n].parts] + [(n, None) for n in names if not pending[n]]
     # fresh interpreters: the workers import numba themselves (no fork of a process that has)
     with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(_warm_set, n) for n in names]
-        for fut in as_completed(futures):
-            n, s = fut.result()
-            done[n] = s
-            if report is not None:
-                report(n, s)
+        running = {pool.submit(_task, *t) for t in tasks}
+        while running:
+            finished, running = wait(running, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                n, part = fut.result()
+                if part is None:
+                    ready(n)
+                    continue
+                pending[n].discard(part)
+                if not pending[n]:
+                    running.add(pool.submit(_task, n, None))
     return done

@@ -46,6 +46,37 @@ def test_default_sets_cover_every_builtin_scene(scene_name, tmp_path):
     assert rec.names == [], f"{scene_name} compiled {rec.names} after the {family!r} set was warmed"
 
 
+_PARTS_THEN_WARM = """
+import sys
+from numba.core import event
+from liegroup_int.precompile import KERNEL_SETS, PARTS, warm_scene
+ks = KERNEL_SETS[sys.argv[1]]
+for part in ks.parts:
+    PARTS[part](ks)
+names = []
+class Rec(event.Listener):
+    def on_start(self, ev):
+        names.append(ev.data["dispatcher"].py_func.__qualname__)
+    def on_end(self, ev):
+        pass
+with event.install_listener("numba:compile", Rec()):
+    warm_scene(ks.scene, ks.overrides)
+print(repr(names))
+"""
+
+
+@pytest.mark.parametrize("name", sorted(n for n, ks in KERNEL_SETS.items() if ks.parts))
+def test_a_set_s_parts_leave_its_warm_up_nothing_to_compile(name):
+    """The pieces ``compile`` runs side by side (the stage rate; the action and the engine's
+    loop, compiled without running it) are all a first run of the set's scene needs: in a
+    fresh process that ran them, its warm-up compiles (or loads) nothing more."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _PARTS_THEN_WARM, name], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", f"{name}: {out.stdout[-2000:]}"
+
+
 @pytest.mark.parametrize("name", sorted(n for n, ks in KERNEL_SETS.items() if ks.warm is None))
 def test_every_kernel_set_names_a_valid_scene(name):
     ks = KERNEL_SETS[name]

@@ -628,14 +628,31 @@ class CompiledStepper:
         after ``t_return``; ``y`` is not modified. ``memory`` (:meth:`memory`) carries FSAL
         reuse from one call to the next; without it each call starts afresh. See
         :class:`Advance`."""
-        cp, flat = self.cp, self.cp.pack(y)
-        mem = memory if memory is not None else self.memory(y)
-        args = (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal, flat, float(t_start),
-                float(t_stop), float(dt), int(i_first), int(n_steps), float(t_return), float(max_angle), mem.F, mem.c)
+        cp = self.cp
+        args = self._fixed_args(t_start, y, t_stop, dt, n_steps, max_angle, i_first, t_return, memory)
         out = self._loop("advance_fixed", args)(*args)
         yf, steps, status, t, t_fail, h_min, h_max, ang, quad, evals, y_prev, K, t_prev = out
         return Advance(cp.unpack(yf), float(t), int(steps), float(h_min), float(h_max), _FIXED_STATUS[status],
                        float(t_fail), float(ang), float(quad), int(evals), _LastStep(cp, y_prev, K, t_prev))
+
+    def _fixed_args(self, t_start, y, t_stop, dt, n_steps, max_angle, i_first, t_return, memory) -> tuple:
+        cp, flat = self.cp, self.cp.pack(y)
+        mem = memory if memory is not None else self.memory(y)
+        return (cp.data, cp.increment_size(flat), self.A, self.b, self.c, self.fsal, flat, float(t_start),
+                float(t_stop), float(dt), int(i_first), int(n_steps), float(t_return), float(max_angle), mem.F, mem.c)
+
+    def compile_fixed(self, y) -> None:
+        """Compile (or load from the disk cache) the fixed-step loop for states like ``y``
+        without running it. When the data carry first-class functions, only their types
+        are needed: the loop compiles while the functions compile elsewhere (``liegroup-int
+        compile`` does both side by side)."""
+        from numba import typeof
+
+        args = self._fixed_args(0.0, y, 1.0, 1.0, 1, math.inf, 0, math.inf, None)
+        if self.cp.functions:
+            self._loop("advance_fixed", args)
+        else:
+            self.engine.advance_fixed.compile(tuple(typeof(a) for a in args))
 
     def advance_to(self, t, y, stop, h, err_prev, rate, rtol, atol, h_max, max_steps_left, max_angle,
                    gains, t_land: float | None = None, memory: FsalMemory | None = None) -> AdaptiveAdvance:
