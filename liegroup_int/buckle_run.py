@@ -119,14 +119,14 @@ def _print(scene: Scene, s: dict, out: Path) -> None:
 def main_buckle(args) -> int:
     """The ``buckle`` command (:mod:`liegroup_int.cli`): exit 0, 2 (bad input, one line) or
     3 (the lowest factor not confirmed along the load path; the files are written)."""
-    from .scenes import load_scene, parse_override
+    from .scenes import parse_override
+    from .static_run import load_static_scene
 
     if args.n < 1:
         raise SceneError(f"buckle: --n {args.n}: expected at least one mode")
     if args.steps < 1:
         raise SceneError(f"buckle: --steps {args.steps}: expected a positive number of load steps")
-    overrides = {**dict(parse_override(s) for s in args.overrides), "integrator.backend": "numpy"}
-    scene = load_scene(args.scene, overrides)
+    scene = load_static_scene(args.scene, dict(parse_override(s) for s in args.overrides), "buckle")
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-buckle"
     try:
         s = run_buckle(scene, out, n=args.n, steps=args.steps, refine=not args.no_refine, t=args.time)

@@ -460,7 +460,8 @@ def _modes(args) -> int:
     if grow:
         print(f"warning: {scene.source}: {len(grow)} growing mode(s) {about.split(' (')[0]} (Re lambda > 0, growth by "
               f"more than e over t_end), the fastest {max(r['re_lambda'] for r in grow):.3g} 1/s", file=sys.stderr)
-    print(f"-> {out} ({', '.join(p.name for p in made[:1] + made[-1:])}{', mode_XX.vtu, modes.pvd' if shapes else ''})")
+    listed = [made[0].name] + ([made[-1].name, "mode_XX.vtu", "modes.pvd"] if shapes else [])
+    print(f"-> {out} ({', '.join(listed)})")
     return 0
 
 

@@ -43,6 +43,16 @@ def check_scene(scene: Scene, command: str = "static") -> None:
                          f'(got "{scene["space.formulation"]}")')
 
 
+def load_static_scene(source, overrides: dict, command: str = "static") -> Scene:
+    """The scene ``source`` with ``overrides`` and the NumPy backend (the static solver's
+    Jacobians run on it), after :func:`check_scene` on the scene as given (a scene that is
+    not a beam has no backend key to set)."""
+    from .scenes import load_scene
+
+    check_scene(load_scene(source, overrides), command)
+    return load_scene(source, {**overrides, "integrator.backend": "numpy"})
+
+
 def static_problem(scene: Scene, command: str = "static"):
     """The scene's beam problem, after :func:`check_scene` (the ``static`` and ``buckle``
     commands load the scene with the NumPy backend: the solver evaluates the forces in
@@ -183,7 +193,7 @@ def run_arc_length(scene: Scene, out_dir: Path, ds: float, steps: int, tol: floa
 def main_static(args) -> int:
     """The ``static`` command (:mod:`liegroup_int.cli`): exit 0, 2 (bad input) or 3 (a load
     step did not converge)."""
-    from .scenes import load_scene, parse_override
+    from .scenes import parse_override
 
     if args.steps < 1:
         raise SceneError(f"static: --steps {args.steps}: expected a positive number of load steps")
@@ -191,8 +201,7 @@ def main_static(args) -> int:
         raise SceneError(f"static: --max-iter {args.max_iter}: expected a positive number of iterations")
     if not args.tol > 0:
         raise SceneError(f"static: --tol {args.tol}: expected a positive tolerance")
-    overrides = {**dict(parse_override(s) for s in args.overrides), "integrator.backend": "numpy"}
-    scene = load_scene(args.scene, overrides)
+    scene = load_static_scene(args.scene, dict(parse_override(s) for s in args.overrides))
     out = args.out if args.out is not None else Path("runs") / f"{scene.name}-static"
     if args.arc_length is not None and not args.arc_length > 0:
         raise SceneError(f"static: --arc-length {args.arc_length}: expected a positive step")

@@ -210,6 +210,20 @@ def test_buckle_refuses_collocation_and_unconfirmed_loads(tmp_path, capsys):
     assert (tmp_path / "b" / "summary.json").exists()
 
 
+@pytest.mark.parametrize("command", ["static", "buckle"])
+def test_static_commands_refuse_a_rigid_body_scene_by_its_kind(command, tmp_path, capsys):
+    """Not a complaint about the backend key the commands set for beams."""
+    assert main([command, "heavy_top", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"error: builtin:heavy_top: {command} needs a beam scene (problem = \"beam\"), not 'rigid_body'\n"
+
+
+def test_modes_of_a_rigid_body_lists_the_files_it_wrote(tmp_path, capsys):
+    assert main(["modes", "heavy_top", "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == f"-> {tmp_path} (modes.csv)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["modes.csv"]
+
+
 def test_modes_about_static_command(tmp_path, capsys):
     """The column under its 20 N (0.37 of the critical load): the header names the
     equilibrium, the first frequency is the API's (the command runs the compiled kernels,
