@@ -107,57 +107,10 @@ def _view(typingctx, arr, offset, shape):
     return ret(arr, types.intp, types.UniTuple(types.intp, nd)), codegen
 
 
-@njit(cache=True, inline="always")
-def f1(flat, head, k):
-    return _view(flat, head[_HW * k], (head[_HW * k + 1],))
-
-
-@njit(cache=True, inline="always")
-def f2(flat, head, k):
-    return _view(flat, head[_HW * k], (head[_HW * k + 1], head[_HW * k + 2]))
-
-
-@njit(cache=True, inline="always")
-def f3(flat, head, k):
-    return _view(flat, head[_HW * k], (head[_HW * k + 1], head[_HW * k + 2], head[_HW * k + 3]))
-
-
-@njit(cache=True, inline="always")
-def f4(flat, head, k):
-    return _view(flat, head[_HW * k], (head[_HW * k + 1], head[_HW * k + 2], head[_HW * k + 3], head[_HW * k + 4]))
-
-
-@njit(cache=True, inline="always")
-def fs(flat, head, k):
-    return flat[head[_HW * k]]
-
-
-@njit(cache=True, inline="always")
-def i1(flat, head, k):
-    return f1(head, head, k)
-
-
-@njit(cache=True, inline="always")
-def i2(flat, head, k):
-    return f2(head, head, k)
-
-
-@njit(cache=True, inline="always")
-def is_(flat, head, k):
-    return fs(head, head, k)
-
-
-@njit(cache=True, inline="always")
-def bs(flat, head, k):
-    return is_(flat, head, k) != 0
-
-
-_READERS = {"f1": f1, "f2": f2, "f3": f3, "f4": f4, "i1": i1, "i2": i2, "fs": fs, "is_": is_, "bs": bs}
-
-
 def field_readers(cls) -> tuple[str, ...]:
-    """The reader of each field of the NamedTuple ``cls`` (:func:`f1` ... :func:`bs`),
-    from its annotations (:data:`F1` ... :data:`I2`, ``float``, ``int``, ``bool``)."""
+    """The reader of each field of the NamedTuple ``cls``: ``"f1"`` ... ``"f4"`` (float
+    arrays), ``"i1"``, ``"i2"`` (int arrays), ``"fs"``, ``"is_"``, ``"bs"`` (scalars), from
+    its annotations (:data:`F1` ... :data:`I2`, ``float``, ``int``, ``bool``)."""
     hints = get_type_hints(cls, include_extras=True)
     scalars = {float: "fs", int: "is_", bool: "bs"}
     out = []
@@ -184,13 +137,24 @@ def unpack_as(cls, flat, head):
     return cls(*out)
 
 
+def _reader_expression(r: str, k: int) -> str:
+    """The expression reading field ``k`` with the reader ``r`` (:func:`field_readers`),
+    written out: ``_view`` calls and indexing only (typing 70 inlined reader calls took
+    about 1 s more per entry)."""
+    o = _HW * k
+    if not r[1:].isdigit():
+        return {"fs": f"flat[head[{o}]]", "is_": f"head[head[{o}]]", "bs": f"head[head[{o}]] != 0"}[r]
+    dims = "".join(f"head[{o + 1 + d}], " for d in range(int(r[1])))
+    return f"_view({'flat' if r[0] == 'f' else 'head'}, head[{o}], ({dims}))"
+
+
 @overload(unpack_as, inline="always")
 def _unpack_as(cls, flat, head):
-    """Compiled :func:`unpack_as`: the reader calls of ``cls``'s fields written out once per
+    """Compiled :func:`unpack_as`: the readers of ``cls``'s fields written out once per
     NamedTuple class (numba types the class's fields from them)."""
     pycls = cls.instance_class
-    args = ", ".join(f"{r}(flat, head, {k})" for k, r in enumerate(field_readers(pycls)))
-    scope = dict(_READERS, _cls=pycls)
+    args = ", ".join(_reader_expression(r, k) for k, r in enumerate(field_readers(pycls)))
+    scope = dict(_view=_view, _cls=pycls)
     exec(f"def impl(cls, flat, head):\n    return _cls({args})\n", scope)
     return scope["impl"]
 
