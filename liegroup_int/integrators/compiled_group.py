@@ -32,7 +32,7 @@ from ..groups.kernels_numba import (
     rotation_angle_flat,
     se3_exp_parts,
 )
-from .engine import CompiledProblem, EngineKernels
+from .engine import CompiledProblem, EngineKernels, FunctionValue
 
 
 def is_compiled_function(f) -> bool:
@@ -254,8 +254,10 @@ def user_problem(kernels: EngineKernels, data: tuple, problem, dim: int, extra: 
     from numba.core import types as nt
 
     shape = tuple(int(k) for k in problem.space.point_shape)
-    data = data + (shape, field_function(problem.f, len(shape)), (no_event,), np.zeros((3, 1))) + tuple(extra)
-    functions = ((FIELD, field_type(len(shape))), (EVENTS, nt.UniTuple(event_type(len(shape)), 1)))
+    ft, et = field_type(len(shape)), event_type(len(shape))
+    data = data + (shape, FunctionValue(field_function(problem.f, len(shape)), ft), (FunctionValue(no_event, et),),
+                   np.zeros((3, 1))) + tuple(extra)
+    functions = ((FIELD, ft), (EVENTS, nt.UniTuple(et, 1)))
     return CompiledProblem(kernels, data, lambda n: dim, single_point_pack(shape), lambda flat: flat.reshape(shape),
                            functions=functions, with_events=_with_events)
 
@@ -271,7 +273,7 @@ def _with_events(cp: CompiledProblem, specs, t0: float, y0) -> CompiledProblem |
     if not specs or not all(is_compiled_function(s.fn) for s in specs):
         return None
     ndim = len(cp.data[SHAPE])
-    gs = tuple(event_function(s.fn, ndim) for s in specs)
+    gs = tuple(FunctionValue(event_function(s.fn, ndim), event_type(ndim)) for s in specs)
     state = np.array([[float(s.fn(t0, y0)) for s in specs], [s.direction for s in specs], [1.0] * len(specs)])
     data = cp.data[:EVENTS] + (gs, state) + cp.data[EVSTATE + 1:]
     functions = dict(cp.functions)

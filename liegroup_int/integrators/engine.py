@@ -547,6 +547,30 @@ def engine_for(kernels: EngineKernels) -> Engine:
     return eng
 
 
+class FunctionValue:
+    """A compiled function ``fn`` as a first-class function value of type ``ftype`` (a
+    ``numba.types.FunctionType``) whose address is looked up once. Given the dispatcher
+    itself, numba looks its compiled wrapper up again at every call of a loop (about 40 us
+    a function, more than a one-step call's whole work). Numba's wrapper address protocol
+    (``__wrapper_address__``, ``signature``); the address is not pickled."""
+
+    def __init__(self, fn, ftype):
+        self.fn, self.ftype, self._address = fn, ftype, None
+
+    def __wrapper_address__(self) -> int:
+        if self._address is None:
+            from numba.experimental.function_type import _get_wrapper_address
+
+            self._address = _get_wrapper_address(self.fn, self.ftype.signature)
+        return self._address
+
+    def signature(self):
+        return self.ftype.signature
+
+    def __getstate__(self):
+        return {"fn": self.fn, "ftype": self.ftype, "_address": None}
+
+
 def typed_entry(loop, args: tuple, functions: dict) -> Callable:
     """The entry point of the numba dispatcher ``loop`` compiled for ``args`` with the
     entries ``functions`` of ``args[0]`` (index -> ``FunctionType``) typed as first-class

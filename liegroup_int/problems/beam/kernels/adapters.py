@@ -32,7 +32,7 @@ from numba.extending import intrinsic, overload
 from numba.np.arrayobj import populate_array
 
 from ....groups.kernels_numba import normalize_rotations
-from ....integrators.engine import CompiledProblem, EngineKernels
+from ....integrators.engine import CompiledProblem, EngineKernels, FunctionValue
 from .band import max_window_norm
 from .profiles import set_loads
 
@@ -359,7 +359,8 @@ class KernelSet:
         flat = self.flat.copy()
         d = unpack_as(self.data_cls, flat, self.head)
         action, rates, kernels = self.kernels()
-        data = (flat, self.head, d.loads, *enc, d.band, d.j0, rates, action)
-        types = _function_types(len(fields), self.rate_args)
+        ftypes = _function_types(len(fields), self.rate_args)
+        data = (flat, self.head, d.loads, *enc, d.band, d.j0, FunctionValue(rates, ftypes[0]),
+                FunctionValue(action, ftypes[1]))
         return CompiledProblem(kernels, data, lambda packed: 12 * n, pack_state, unpack_state,
-                               functions=((RATES, types[0]), (ACTION, types[1])))
+                               functions=((RATES, ftypes[0]), (ACTION, ftypes[1])))
