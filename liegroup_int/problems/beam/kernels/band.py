@@ -117,7 +117,7 @@ def band_lu_residual(ab, mb, lower, upper):
     return worst
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def window(B, f, i, j0, X, q):
     """``sum_k B[f, i, k] X[j0[i] + k, q:q+3]``: row ``i`` of basis matrix ``f`` (windows
     ``(., m, W)``) times control values."""
@@ -131,7 +131,7 @@ def window(B, f, i, j0, X, q):
     return s0, s1, s2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def window2(B, f, g, i, j0, X, q):
     """:func:`window` of basis matrices ``f`` and ``g`` together (one pass over ``X``)."""
     s0 = s1 = s2 = t0 = t1 = t2 = 0.0
@@ -148,14 +148,14 @@ def window2(B, f, g, i, j0, X, q):
     return (s0, s1, s2), (t0, t1, t2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def window3(B, i, j0, X, q):
     """:func:`window` of basis matrices 0, 1 and 2 together."""
     t, r = window2(B, 1, 2, i, j0, X, q)
     return window(B, 0, i, j0, X, q), t, r
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def max_window_norm(B, j0, X):
     """``max_i |window(B, 0, i, j0, X, 0)|`` over the rows of ``B`` (NaN wins, as ``np.max``)."""
     best = 0.0
@@ -169,7 +169,7 @@ def max_window_norm(B, j0, X):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def forward_row(x, i, lu, lower, q0, q1):
     """Row ``i`` of the unit-lower sweep ``x <- L^-1 x`` on columns ``q0:q1`` (rows
     ``< i`` already done)."""
@@ -180,7 +180,7 @@ def forward_row(x, i, lu, lower, q0, q1):
                 x[i, q] -= m * x[j, q]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def backward_row(x, i, lu, lower, upper, q0, q1):
     """Row ``i`` of the upper sweep ``x <- U^-1 x`` (rows ``> i`` done; the diagonal of
     ``U`` stored as its reciprocal)."""
@@ -219,12 +219,12 @@ def solve_cols(x, lu, lower, upper, minv, forward_done, q0, q1, tmp):
         backward_row(x, i, lu, lower, upper, q0, q1)
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True, fastmath={"contract"}, inline="always")
 def _load9(j, a, b, c):
     return a[j, 0], a[j, 1], a[j, 2], b[j, 0], b[j, 1], b[j, 2], c[j, 0], c[j, 1], c[j, 2]
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True, fastmath={"contract"}, inline="always")
 def _eliminate9(U, k, j, i, a, b, c, s):
     """``s`` minus ``U[f, k, j]`` times row ``i`` of each field (factor ``f`` per column)."""
     ua, ub, u0, u1, u2 = U[0, k, j], U[1, k, j], U[2, k, j], U[3, k, j], U[4, k, j]
@@ -233,7 +233,7 @@ def _eliminate9(U, k, j, i, a, b, c, s):
             s[6] - u0 * c[i, 0], s[7] - u1 * c[i, 1], s[8] - u2 * c[i, 2])
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True, fastmath={"contract"}, inline="always")
 def _store9(dinv, j, a, b, c, s):
     da, db = dinv[0, j], dinv[1, j]
     a[j, 0], a[j, 1], a[j, 2] = s[0] * da, s[1] * da, s[2] * da
@@ -264,7 +264,7 @@ def chol_solve9(U, dinv, a, b, c):
         _store9(dinv, i, a, b, c, s)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def dense_solve(S, m):
     """``S[:, :m]^-1 S[:, m]`` into ``S[:, m]`` in place: Gaussian elimination with partial
     pivoting of a small dense system (the kernels' constraint capacitances, ``m`` up to a
