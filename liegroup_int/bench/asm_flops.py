@@ -257,9 +257,14 @@ def engine_args(cp, y) -> dict[str, tuple]:
     increment."""
     import numpy as np
 
+    from ..integrators.engine import FunctionValue
+
     k, flat = cp.kernels, cp.pack(y)
+    # the functions the loops call through their addresses, as dispatchers: compiled into
+    # the kernel, so that its compile unit holds their code
+    data = tuple(x.fn if isinstance(x, FunctionValue) else x for x in cp.data)
     m = cp.increment_size(flat)
     view = k.increment_view if k.increment_view is not None else (lambda data, a: a)
-    u, out = view(cp.data, np.zeros(m)), view(cp.data, np.zeros(m))
-    y_out = k.new_state(cp.data, flat) if k.new_state is not None else np.empty_like(flat)
-    return {"rate": (cp.data, 0.0, flat, u, out), "action": (cp.data, u, flat, y_out)}
+    u, out = view(data, np.zeros(m)), view(data, np.zeros(m))
+    y_out = k.new_state(data, flat) if k.new_state is not None else np.empty_like(flat)
+    return {"rate": (data, 0.0, flat, u, out), "action": (data, u, flat, y_out)}

@@ -33,7 +33,9 @@ for a closure over other ``@njit`` functions. Unlike a closure (whose captured
 dispatchers pickle differently in every process), the copies can be cached on disk:
 each is named after the plugin and a hash of the package's and the kernels' source files,
 so numba keeps one cache entry per plugin and any change to the code they call compiles
-anew.
+anew. A plugin may instead hand a large kernel to the loops as a first-class function
+value in its data (:class:`FunctionValue`, typed by :attr:`CompiledProblem.functions`):
+the loops then call it through its address and compile without its code.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ from typing import Callable
 
 import numpy as np
 from numba import njit
+from numba.core import types as nbtypes
 
 from . import controller as _controller
 from .combine_numba import combine_into as _combine
@@ -547,7 +550,7 @@ def engine_for(kernels: EngineKernels) -> Engine:
     return eng
 
 
-class FunctionValue:
+class FunctionValue(nbtypes.WrapperAddressProtocol):
     """A compiled function ``fn`` as a first-class function value of type ``ftype`` (a
     ``numba.types.FunctionType``) whose address is looked up once. Given the dispatcher
     itself, numba looks its compiled wrapper up again at every call of a loop (about 40 us

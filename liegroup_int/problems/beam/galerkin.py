@@ -430,7 +430,6 @@ class GalerkinBeamProblem(BeamBase):
         points there, the relative reference rotation ``Q = R0_a^T R0_b``, the point load
         (or None), whether it is rigid and its constrained rotational directions ``D``."""
         kinds = getattr(space, "joint_kinds", ())
-        axes = getattr(space, "joint_axes", (None,) * len(kinds))
         points = self._end_points(space)
         out = []
         for k, (a, b), ld in self.joint_loads(space, loads):
