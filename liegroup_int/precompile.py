@@ -37,7 +37,7 @@ class KernelSet:
     overrides: tuple[str, ...]
     description: str
     warm: Callable[[], float] | None = None  # instead of a scene: a function that warms the set
-    parts: tuple[str, ...] = ()  # pieces (:data:`PARTS`) that compile side by side before the warm-up
+    parts: tuple[str, ...] = ()  # pieces (:data:`PARTS`) compiled side by side in place of the warm-up
 
 
 def _built(ks: KernelSet):
