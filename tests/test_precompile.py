@@ -46,6 +46,18 @@ def test_default_sets_cover_every_builtin_scene(scene_name, tmp_path):
     assert rec.names == [], f"{scene_name} compiled {rec.names} after the {family!r} set was warmed"
 
 
+@pytest.mark.parametrize("scene_name", ["spinning_helix", "cantilever"])
+def test_the_split_set_covers_a_leapfrog_run_of_another_scene(scene_name):
+    """``beam_galerkin_split`` (``compile --all``) warms the compiled leapfrog of every
+    Galerkin scene: after it, a ``strang`` run of another scene compiles nothing."""
+    ks = KERNEL_SETS["beam_galerkin_split"]
+    warm_scene(ks.scene, ks.overrides)
+    rec = _Compiles()
+    with event.install_listener("numba:compile", rec):
+        warm_scene(scene_name, ("integrator.method=strang", "integrator.dt=auto"))
+    assert rec.names == [], f"{scene_name} compiled {rec.names}"
+
+
 _PARTS_THEN_WARM = """
 import sys
 from numba.core import event
