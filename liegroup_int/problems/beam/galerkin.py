@@ -317,9 +317,6 @@ class GalerkinBeamProblem(BeamBase):
         index = tuple(k for k, b in enumerate(self.bodies) if b.body.mass > 0.0 and np.any(b.c))
         if not index:
             return None
-        if self.hinges:
-            raise ValueError("bodies: a body off its end point (offset) in a frame with hinges is not supported; "
-                             "put its centre at the end point or use rigid or ball joints")
         driven = {e.index for e in self.moving_ends + self.translating_ends}
         if any(self.bodies[i].row in driven for i in index):
             raise ValueError("bodies: a body off its end point (offset) at an end with prescribed motion is not "
@@ -331,13 +328,31 @@ class GalerkinBeamProblem(BeamBase):
                 r[self.bodies[i].row, e] = 1.0
                 P[6 * k + e] = self._constrain(self.mass_position.solve(r), "position")
                 P[6 * k + 3 + e] = self._constrain(self._solve_rotation(r, 0.0), "rotation")
-        rows = [self.bodies[i].row for i in index]
-        G = np.zeros((6 * len(index),) * 2)
-        for l in range(6 * len(index)):
+        return _GCoupling(index, P, self._read_back(P, [self.bodies[i].row for i in index]))
+
+    @staticmethod
+    def _read_back(P: np.ndarray, rows) -> np.ndarray:
+        """``G = U^T P``: the responses ``P`` read on the bodies' ``rows``, ``(6 k, 6 k)``."""
+        G = np.zeros((P.shape[0],) * 2)
+        for l in range(P.shape[0]):
             for k, r in enumerate(rows):
                 G[6 * k:6 * k + 3, l] = P[l, r] if l % 6 < 3 else 0.0
                 G[6 * k + 3:6 * k + 6, l] = P[l, r] if l % 6 >= 3 else 0.0
-        return _GCoupling(index, P, G)
+        return G
+
+    def _responses(self, y) -> tuple:
+        """``(P, G)`` of the coupling at ``y``: with hinges, the couples' responses projected
+        on the hinges' constraints ``x - Y S^-1 C x`` (their rows follow the state, so the
+        responses of the hinge-constrained solve do too); the forces' are those of the
+        position field, which the hinges do not constrain."""
+        cp = self._coupling
+        if not self.hinges:
+            return cp.P, cp.G
+        P = np.array(cp.P)
+        for l in range(3, P.shape[0]):
+            if l % 6 >= 3:
+                P[l] = self._constrain_hinges(P[l], y, None, "rotation", affine=False)
+        return P, self._read_back(P, [self.bodies[i].row for i in cp.index])
 
     def _body_mass(self, y) -> np.ndarray:
         """The coupled bodies' mass blocks not in the banded matrices, ``(6 k, 6 k)``: per body
@@ -363,9 +378,10 @@ class GalerkinBeamProblem(BeamBase):
         if cp is None:
             return xp, xr, np.zeros(0)
         C = self._body_mass(y)
-        z = np.linalg.solve(np.eye(C.shape[0]) + C @ cp.G, C @ self._body_rows(xp, xr))
+        P, G = self._responses(y)
+        z = np.linalg.solve(np.eye(C.shape[0]) + C @ G, C @ self._body_rows(xp, xr))
         pos = (np.arange(z.size) % 6) < 3
-        return (xp - np.tensordot(z[pos], cp.P[pos], axes=1), xr - np.tensordot(z[~pos], cp.P[~pos], axes=1), z)
+        return (xp - np.tensordot(z[pos], P[pos], axes=1), xr - np.tensordot(z[~pos], P[~pos], axes=1), z)
 
     def _forces_on_rows(self, t: float, y, k: np.ndarray | None = None) -> tuple:
         """:meth:`_forces` less the coupled bodies' coupling forces ``U C U^T x`` at the rates
@@ -500,9 +516,10 @@ class GalerkinBeamProblem(BeamBase):
                 out.append((-h.E @ G.T @ Aa, h.E @ Ab, np.zeros(2)))
         return tuple(out)
 
-    def _hinge_multipliers(self, x: np.ndarray, y, u: np.ndarray, field: str):
+    def _hinge_multipliers(self, x: np.ndarray, y, u: np.ndarray, field: str, affine: bool = True):
         """``(lambda, Y)``: the hinges' multipliers ``(H, 2)`` for the solution ``x`` of one
-        rotational field (constant joints applied) and their columns ``Y`` ``(2 H, n, 3)``."""
+        rotational field (constant joints applied) and their columns ``Y`` ``(2 H, n, 3)``;
+        without ``affine``, of the constraints' linear part ``C x = 0``."""
         rows = self._hinge_rows(y, u, field)
         Ys = [np.tensordot(Ca[k], h.Z[field][0], 1) + np.tensordot(Cb[k], h.Z[field][1], 1)
               for h, (Ca, Cb, _) in zip(self.hinges, rows) for k in range(2)]
@@ -511,14 +528,15 @@ class GalerkinBeamProblem(BeamBase):
             return np.concatenate([Ca @ v[h.a] + Cb @ v[h.b] for h, (Ca, Cb, _) in zip(self.hinges, rows)])
 
         S = np.array([C(Yl) for Yl in Ys]).T
-        g = np.concatenate([r[2] for r in rows])
+        g = np.concatenate([r[2] for r in rows]) if affine else 0.0
         return np.linalg.solve(S, C(x) - g).reshape(-1, 2), np.array(Ys)
 
-    def _constrain_hinges(self, x: np.ndarray, y, u: np.ndarray, field: str) -> np.ndarray:
-        """``x - Y S^-1 (C x - g)``: the hinges' constraints on one rotational field."""
+    def _constrain_hinges(self, x: np.ndarray, y, u: np.ndarray, field: str, affine: bool = True) -> np.ndarray:
+        """``x - Y S^-1 (C x - g)``: the hinges' constraints on one rotational field (``g = 0``
+        without ``affine``)."""
         if not self.hinges:
             return x
-        lam, Y = self._hinge_multipliers(x, y, u, field)
+        lam, Y = self._hinge_multipliers(x, y, u, field, affine)
         return x - np.tensordot(lam.ravel(), Y, axes=1)
 
     def _end_points(self, space) -> dict:

@@ -94,6 +94,8 @@ class GalerkinData(NamedTuple):
     cpl_G: F2
     cpl_C: F2  # (6 k, 6 k) work: their mass blocks; (6 k, 6 k + 2) the capacitance, right side, U^T x
     cpl_S: F2
+    cpl_Ph: F3  # work with hinges: P with the couples' columns on the hinges' constraints, G of it
+    cpl_Gh: F2
     hinge_ab: I2  # (H, 4) hinges: rows a, b and points of a, b
     hinge_E: F3  # (H, 2, 3) rows perpendicular to the material axis at b
     hinge_Z: F3  # (12 H, n, 3) constrained responses, index ((h 2 + field) 2 + end) 3 + c
@@ -288,16 +290,17 @@ def _hinge_apply(d, l, x):
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
-def _constrain_hinges(x, d, R, w, u1, field):
+def _constrain_hinges(x, d, R, w, u1, field, affine):
     """``x <- x - Y S^-1 (C x - g)`` for the hinges on one rotational field, ``Y = M_c^-1
-    C^T`` from the constrained responses ``hinge_Z`` (the constant joints kept)."""
+    C^T`` from the constrained responses ``hinge_Z`` (the constant joints kept); ``g = 0``
+    without ``affine``."""
     m = d.hinge_S.shape[0]
     if m == 0:
         return
     _hinge_rows(d, R, w, u1, field)
     Z, C, S = d.hinge_Z, d.hinge_C, d.hinge_S
     for k in range(m):
-        S[k, m] = _hinge_apply(d, k, x) - S[k, m]
+        S[k, m] = _hinge_apply(d, k, x) - (S[k, m] if affine else 0.0)
         for l in range(m):
             s = 0.0
             for e in range(2):
@@ -341,7 +344,7 @@ def _solve(d, w, out, R, u1):
         _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
     if d.hinge_S.shape[0]:
         for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
-            _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field)
+            _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field, True)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -367,13 +370,35 @@ def _body_terms(d, w, R, out):
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
-def _couple_bodies(d, R, out):
+def _hinge_responses(d, R, w, u1):
+    """``cpl_Ph, cpl_Gh``: the couples' columns of ``cpl_P`` projected on the hinges'
+    constraints at the state, ``x - Y S^-1 C x``, and their read-back on the bodies' rows
+    (:meth:`GalerkinBeamProblem._responses`)."""
+    P, G = d.cpl_Ph, d.cpl_Gh
+    for l in range(P.shape[0]):
+        for j in range(P.shape[1]):
+            for q in range(3):
+                P[l, j, q] = d.cpl_P[l, j, q]
+        if l % 6 >= 3:
+            _constrain_hinges(P[l], d, R, w, u1, 1, False)
+    for l in range(P.shape[0]):
+        for a in range(P.shape[0]):
+            r = d.body_row[d.cpl_index[a // 6]]
+            G[a, l] = P[l, r, a % 3] if (a % 6 < 3) == (l % 6 < 3) else 0.0
+
+
+@njit(cache=True, fastmath=False, _nrt=False)
+def _couple_bodies(d, R, w, u1, out):
     """The accelerations ``out[2], out[3]`` corrected for the mass blocks of the bodies off
     their end points, ``[[0, -m R hat(c)], [m hat(c) R^T, J - diag J]]``: ``x <- x - P z``
-    with ``(I + C G) z = C U^T x`` (:meth:`GalerkinBeamProblem._couple_bodies`)."""
+    with ``(I + C G) z = C U^T x`` (:meth:`GalerkinBeamProblem._couple_bodies`; with hinges
+    ``P, G`` of :func:`_hinge_responses`)."""
     nk = d.cpl_index.shape[0]
     m6 = 6 * nk
     C, S, G, P = d.cpl_C, d.cpl_S, d.cpl_G, d.cpl_P
+    if d.hinge_S.shape[0]:
+        _hinge_responses(d, R, w, u1)
+        G, P = d.cpl_Gh, d.cpl_Ph
     C[:] = 0.0
     for k in range(nk):
         i = d.cpl_index[k]
@@ -464,7 +489,7 @@ def rates(c, v, w, R, K, u, out, d, kin):
     power += _hinge_springs(d, R, w, out)
     _solve(d, w, out, R, u1)
     if d.cpl_index.shape[0]:
-        _couple_bodies(d, R, out)
+        _couple_bodies(d, R, w, u1, out)
     if not d.power:
         return 0.0
     return power + _support_power(d, v, w, out)
@@ -634,7 +659,9 @@ def _body_data(pb) -> dict:
             "cpl_index": np.array(cp.index if cp is not None else (), dtype=np.int64),
             "cpl_P": c64(cp.P if cp is not None else np.zeros((0, n, 3))),
             "cpl_G": c64(cp.G if cp is not None else np.zeros((0, 0))),
-            "cpl_C": np.zeros((6 * k, 6 * k)), "cpl_S": np.zeros((6 * k, 6 * k + 2))}
+            "cpl_C": np.zeros((6 * k, 6 * k)), "cpl_S": np.zeros((6 * k, 6 * k + 2)),
+            "cpl_Ph": np.zeros((6 * k if pb.hinges else 0, n, 3)),
+            "cpl_Gh": np.zeros((6 * k if pb.hinges else 0,) * 2)}
 
 
 def _hinge_data(pb) -> dict:
