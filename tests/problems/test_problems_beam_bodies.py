@@ -272,10 +272,39 @@ def test_the_backends_agree_with_a_tip_body():
     assert np.max(np.abs(rates[0][3, -1])) > 1.0  # the end's angular acceleration is not trivial
 
 
+#: smooth drives of the start (zero acceleration at t = 0): a spin-up of the clamped end about
+#: a skew axis, and a speed-up of the hinged end across the beam
+DRIVES = {"motion": {"motion.start.kind": "spin_up", "motion.start.rate": 20.0, "motion.start.time": 0.01,
+                     "motion.start.axis": [0.0, 0.6, 0.8]},
+          "translation": {"bc.start": "hinged", "translation.start.kind": "speed_up", "translation.start.rate": 1.0,
+                          "translation.start.time": 0.01, "translation.start.axis": [0.0, 1.0, 0.0]}}
+
+
+@pytest.mark.parametrize("drive", sorted(DRIVES))
+def test_a_body_off_a_driven_end_closes_the_energy_balance(drive):
+    """A body off the driven start (0.2 kg, offset along d1, d2 and d3, a force on it, under
+    gravity): the support's reaction includes the body's coupling force on the prescribed
+    rows, so the work of the drive (reaction times prescribed velocity, integrated by the
+    engine) closes the energy balance over 0.01 s (RKMK4, h = 1e-6): measured 2.9e-15 J
+    (spin-up, 0.67 J of work) and 9.2e-15 J (speed-up, 0.17 J); asserted 1e-12 J. Without the
+    coupling force in the compiled reaction the balance misses by 0.023 J and 0.032 J. The
+    NumPy twin's power equals the compiled one to 1e-12 relative at the final state."""
+    from liegroup_int import integrate
+
+    over = {"loads.gravity": [0.0, 0.0, -9.81], "space.n_ctrl": 12, **DRIVES[drive]}
+    body = [{"at": "start", "mass": 0.2, "inertia": [1e-4, 2e-4, 3e-4], "offset": [0.03, 0.02, -0.05],
+             "force": [0.1, 0.0, 0.0]}]
+    pc, pn = (KINDS["beam"].build(_scene(body, **{"integrator.backend": b, **over})).problem for b in ("numba", "numpy"))
+    y0 = pc.initial_state()
+    res = integrate(pc, y0, (0.0, 0.01), dt=1e-6)
+    defect = pc.mechanical_energy(res.y_final) - pc.mechanical_energy(y0) - res.stats.quadrature
+    print(drive, "energy defect", defect, "work", res.stats.quadrature)
+    assert abs(defect) <= 1e-12 and res.stats.quadrature > 0.1
+    pc.increment_rate(0.01, res.y_final, np.zeros((4, pc.n, 3)))
+    assert float(pc._nb._pw[0]) == pytest.approx(pn.quadrature_rate(0.01, res.y_final), rel=1e-12)
+
+
 @pytest.mark.parametrize("bodies, over, match", [
-    ([{"at": "end", "mass": 1.0, "offset": [0.1, 0.0, 0.0]}],
-     {"bc.end": "hinged", "translation.end.kind": "harmonic", "translation.end.amplitude": 1e-3},
-     "prescribed motion"),
     ([{"at": "end", "mass": -1.0}], {}, "key 'mass'"),
     ([{"at": "end", "mass": 1.0}, {"at": "end", "mass": 2.0}], {}, "two bodies at the end"),
     ([{"at": "end", "mass": 1.0}], {"space.formulation": "primal"}, "key 'bodies': end bodies need"),
@@ -417,3 +446,24 @@ def test_a_hinged_arm_s_spring_balances_the_moment_of_a_force_on_its_offset_body
     phi = pb._hinge_springs(y)[0][0]
     print("k phi", 5.0 * phi, "moment", moment)
     assert phi > 0.3 and abs(5.0 * phi - moment) <= 1e-9 * abs(moment)
+
+
+def test_a_driven_hub_s_reaction_carries_the_body_s_inertia():
+    """A body at the driven start (spin-up about a skew axis) moves with the prescribed rows,
+    so the beam's motion is the same with or without it, and the support's couple differs
+    by the body's inertial couple ``J alpha + omega x J omega`` (spatial, ``alpha`` the
+    prescribed angular acceleration): measured equal to round-off, asserted 1e-10 of it."""
+    from liegroup_int import integrate
+
+    J, t = np.array([1e-4, 2e-4, 3e-4]), 0.005
+    out = []
+    for bodies in ([], [{"at": "start", "mass": 0.2, "inertia": list(J)}]):
+        pb = KINDS["beam"].build(_scene(bodies, **{"space.n_ctrl": 12, **DRIVES["motion"]})).problem
+        y = integrate(pb, pb.initial_state(), (0.0, t), dt=1e-6).y_final
+        out.append((y, pb.reactions(y, t)["start"][1]))
+    (y0, c0), (y1, c1) = out
+    assert np.array_equal(y0.w, y1.w)
+    alpha = 20.0 / 0.01 * (1.0 - np.cos(2.0 * np.pi * t / 0.01)) * np.array([0.0, 0.6, 0.8])  # spin-up
+    Js, omega = y1.R[0] @ np.diag(J) @ y1.R[0].T, y1.R[0] @ y1.w[0]
+    expected = Js @ alpha + np.cross(omega, Js @ omega)
+    assert np.max(np.abs(c1 - c0 - expected)) <= 1e-10 * np.max(np.abs(expected))

@@ -317,10 +317,6 @@ class GalerkinBeamProblem(BeamBase):
         index = tuple(k for k, b in enumerate(self.bodies) if b.body.mass > 0.0 and np.any(b.c))
         if not index:
             return None
-        driven = {e.index for e in self.moving_ends + self.translating_ends}
-        if any(self.bodies[i].row in driven for i in index):
-            raise ValueError("bodies: a body off its end point (offset) at an end with prescribed motion is not "
-                             "supported; put its centre at the end point")
         P = np.zeros((6 * len(index), self.n, 3))
         for k, i in enumerate(index):
             for e in range(3):

@@ -443,20 +443,33 @@ def _column_dot(C, k, x, q):
 
 
 @njit(cache=True, fastmath=False, inline="always")
+def _coupling_force(d, idx, at, q):
+    """Component ``q`` of the coupling force (``at = 0``) or couple (``at = 3``) of the body
+    off its end point on row ``idx`` (:func:`_couple_bodies`' ``z``, left in ``cpl_S``), or 0."""
+    m6 = 6 * d.cpl_index.shape[0]
+    for k in range(d.cpl_index.shape[0]):
+        if d.body_row[d.cpl_index[k]] == idx:
+            return d.cpl_S[6 * k + at + q, m6]
+    return 0.0
+
+
+@njit(cache=True, fastmath=False, inline="always")
 def _support_power(d, v, w, out):
-    """Moving supports: the reaction (the residual of the supported row) times the
-    prescribed velocity."""
+    """Moving supports: the reaction (the residual of the supported row, with the coupling
+    force of a body off its end point there) times the prescribed velocity."""
     power = 0.0
     for e in range(d.end_index.shape[0]):
         idx = d.end_index[e]
         for k in range(d.fp.shape[0]):
             if d.end_sliding[e] and d.fp[k] == idx:
                 for q in range(3):
-                    power += (_column_dot(d.Cp, k, out[2], q) - d.keep[k, q]) * v[idx, q]
+                    f = _column_dot(d.Cp, k, out[2], q) - d.keep[k, q] + _coupling_force(d, idx, 0, q)
+                    power += f * v[idx, q]
         for k in range(d.fr.shape[0]):
             if d.end_moving[e] and d.fr[k] == idx:
                 for q in range(3):
-                    power += (_column_dot(d.Crot[q], k, out[3], q) - d.keep[2 + k, q]) * w[idx, q]
+                    c = _column_dot(d.Crot[q], k, out[3], q) - d.keep[2 + k, q] + _coupling_force(d, idx, 3, q)
+                    power += c * w[idx, q]
     return power
 
 
