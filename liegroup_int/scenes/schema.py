@@ -10,6 +10,7 @@ and what was expected.
 from __future__ import annotations
 
 import math
+import numbers
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,7 +95,13 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def _is_number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    """A finite real number, NumPy's scalars included (not a bool)."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _as_list(value):
+    """A list, tuple or one-dimensional array as a list (anything else unchanged)."""
+    return list(value) if isinstance(value, (list, tuple)) or getattr(value, "ndim", None) == 1 else value
 
 
 class _Expected(Exception):
@@ -112,7 +119,7 @@ def _as_float(value, expected: str) -> float:
 
 
 def _float_or_auto(key: Key, value):
-    if value in ("auto", "none"):
+    if isinstance(value, str) and value in ("auto", "none"):
         return None if value == "none" else value
     return _as_float(value, 'a finite number, "auto", or "none" (adaptive stepping with rtol/atol)')
 
@@ -134,6 +141,7 @@ def _str(key: Key, value):
 
 
 def _numbers(value, n: int | None, expected: str) -> tuple:
+    value = _as_list(value)
     if not (isinstance(value, list) and value and (n is None or len(value) == n) and all(map(_is_number, value))):
         raise _Expected(expected)
     return tuple(float(x) for x in value)
@@ -167,9 +175,10 @@ def _table(key: Key, value):
 _KINDS: dict[str, Callable] = {
     "float": lambda key, v: _as_float(v, "a finite number" + _unit(key)),
     "float_or_auto": _float_or_auto,
-    "number_or_auto": lambda key, v: v if v == "auto" else _as_float(v, "a finite number" + _unit(key)
+    "number_or_auto": lambda key, v: v if isinstance(v, str) and v == "auto" else _as_float(v, "a finite number" + _unit(key)
                                                                       + ' or "auto"'),
-    "int": _of_type(lambda v: isinstance(v, int) and not isinstance(v, bool), "an integer"),
+    "int": lambda key, v: int(_of_type(lambda x: isinstance(x, numbers.Integral) and not isinstance(x, bool),
+                                       "an integer")(key, v)),
     "bool": _of_type(lambda v: isinstance(v, bool), "true or false"),
     "str": _str,
     "vec3": lambda key, v: _numbers(v, 3, "a list of 3 numbers"),
@@ -188,7 +197,8 @@ def coerce(key: Key, value, where: str):
         if msg:
             raise _Expected(msg)
     except _Expected as exc:
-        raise SceneError(f"{where}: key '{key.name}' = {value!r}: expected {exc}") from None
+        shown = " ".join(repr(value).split())  # one line, whatever the value (a 2-D array)
+        raise SceneError(f"{where}: key '{key.name}' = {shown}: expected {exc}") from None
     return clean
 
 

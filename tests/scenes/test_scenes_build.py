@@ -64,3 +64,26 @@ def test_a_large_mesh_starts_without_a_dense_spectrum(tmp_path):
     res = run_scene(sc, tmp_path)
     assert res.summary["status"] == "ok" and res.summary["steps"] >= 2
     assert res.summary["guards"]["probe"] == f"skipped ({beam_kind.GALERKIN_CLEAN})"
+
+
+def test_numpy_values_in_overrides_are_numbers():
+    """Overrides from Python may hold NumPy scalars and one-dimensional arrays: they are
+    read as the numbers they are (the same scene as with plain floats and ints), and a bool
+    or an array of the wrong shape is refused in one line."""
+    import numpy as np
+
+    from liegroup_int.scenes import KINDS
+
+    given = {"loads.end.force": np.array([0, 0, -1]), "space.n_ctrl": np.int64(9), "t_end": np.float32(0.5),
+             "bodies": [{"at": "end", "mass": np.float64(0.1), "offset": np.zeros(3)}]}
+    plain = {"loads.end.force": [0.0, 0.0, -1.0], "space.n_ctrl": 9, "t_end": 0.5,
+             "bodies": [{"at": "end", "mass": 0.1, "offset": [0.0, 0.0, 0.0]}]}
+    a, b = (KINDS["beam"].build(load_scene("cantilever", over)) for over in (given, plain))
+    assert a.problem.n == b.problem.n == 9
+    assert np.array_equal(a.problem.point_loads[0][2].force, b.problem.point_loads[0][2].force)
+    for bad, key in (({"space.n_ctrl": np.bool_(True)}, "space.n_ctrl"),
+                     ({"loads.end.force": np.zeros((3, 1))}, "loads.end.force"),
+                     ({"integrator.dt": np.array([1e-3, 2e-3])}, "integrator.dt")):
+        with pytest.raises(SceneError, match=f"key '{key}'") as exc:
+            load_scene("cantilever", bad)
+        assert "\n" not in str(exc.value)
