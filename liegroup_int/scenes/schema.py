@@ -175,8 +175,8 @@ def _table(key: Key, value):
 _KINDS: dict[str, Callable] = {
     "float": lambda key, v: _as_float(v, "a finite number" + _unit(key)),
     "float_or_auto": _float_or_auto,
-    "number_or_auto": lambda key, v: v if isinstance(v, str) and v == "auto" else _as_float(v, "a finite number" + _unit(key)
-                                                                      + ' or "auto"'),
+    "number_or_auto": lambda key, v: v if isinstance(v, str) and v == "auto" else _as_float(
+        v, "a finite number" + _unit(key) + ' or "auto"'),
     "int": lambda key, v: int(_of_type(lambda x: isinstance(x, numbers.Integral) and not isinstance(x, bool),
                                        "an integer")(key, v)),
     "bool": _of_type(lambda v: isinstance(v, bool), "true or false"),

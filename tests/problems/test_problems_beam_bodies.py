@@ -294,7 +294,8 @@ def test_a_body_off_a_driven_end_closes_the_energy_balance(drive):
     over = {"loads.gravity": [0.0, 0.0, -9.81], "space.n_ctrl": 12, **DRIVES[drive]}
     body = [{"at": "start", "mass": 0.2, "inertia": [1e-4, 2e-4, 3e-4], "offset": [0.03, 0.02, -0.05],
              "force": [0.1, 0.0, 0.0]}]
-    pc, pn = (KINDS["beam"].build(_scene(body, **{"integrator.backend": b, **over})).problem for b in ("numba", "numpy"))
+    pc, pn = (KINDS["beam"].build(_scene(body, **{"integrator.backend": b, **over})).problem
+              for b in ("numba", "numpy"))
     y0 = pc.initial_state()
     res = integrate(pc, y0, (0.0, 0.01), dt=1e-6)
     defect = pc.mechanical_energy(res.y_final) - pc.mechanical_energy(y0) - res.stats.quadrature
