@@ -290,17 +290,19 @@ def _hinge_apply(d, l, x):
 
 
 @njit(cache=True, fastmath=False, _nrt=False)
-def _constrain_hinges(x, d, R, w, u1, field, affine):
-    """``x <- x - Y S^-1 (C x - g)`` for the hinges on one rotational field, ``Y = M_c^-1
-    C^T`` from the constrained responses ``hinge_Z`` (the constant joints kept); ``g = 0``
-    without ``affine``."""
+def _constrain_hinges(x, d, R, w, u1, field, g_weight):
+    """``x <- x - Y S^-1 (C x - g_weight g)`` for the hinges on one rotational field, ``Y =
+    M_c^-1 C^T`` from the constrained responses ``hinge_Z`` (the constant joints kept);
+    ``g_weight`` 1.0, or 0.0 for the constraints' linear part. Its callers pass ``field`` and
+    ``g_weight`` as values numba does not type as literals (a loop index, a computed int, a
+    float), so one compiled copy serves them all (a copy compiles in about 5 s)."""
     m = d.hinge_S.shape[0]
     if m == 0:
         return
     _hinge_rows(d, R, w, u1, field)
     Z, C, S = d.hinge_Z, d.hinge_C, d.hinge_S
     for k in range(m):
-        S[k, m] = _hinge_apply(d, k, x) - (S[k, m] if affine else 0.0)
+        S[k, m] = _hinge_apply(d, k, x) - g_weight * S[k, m]
         for l in range(m):
             s = 0.0
             for e in range(2):
@@ -344,7 +346,7 @@ def _solve(d, w, out, R, u1):
         _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
     if d.hinge_S.shape[0]:
         for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
-            _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field, True)
+            _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field, 1.0)
 
 
 @njit(cache=True, fastmath=FM, inline="always")
@@ -379,8 +381,8 @@ def _hinge_responses(d, R, w, u1):
         for j in range(P.shape[1]):
             for q in range(3):
                 P[l, j, q] = d.cpl_P[l, j, q]
-        if l % 6 >= 3:
-            _constrain_hinges(P[l], d, R, w, u1, 1, False)
+        if l % 6 >= 3:  # a couple's column, on the W field (1, computed: not a literal)
+            _constrain_hinges(P[l], d, R, w, u1, l % 6 // 3, 0.0)
     for l in range(P.shape[0]):
         for a in range(P.shape[0]):
             r = d.body_row[d.cpl_index[a // 6]]
