@@ -371,7 +371,7 @@ def _body_terms(d, w, R, out):
     return power
 
 
-@njit(cache=True, fastmath=False, _nrt=False)
+@njit(cache=True, fastmath=False, inline="always")
 def _hinge_responses(d, R, w, u1):
     """``cpl_Ph, cpl_Gh``: the couples' columns of ``cpl_P`` projected on the hinges'
     constraints at the state, ``x - Y S^-1 C x``, and their read-back on the bodies' rows
