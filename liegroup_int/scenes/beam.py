@@ -47,7 +47,8 @@ def _end_keys(end: str) -> list[Key]:
     at = "s = 0" if end == "start" else "s = L"
     return [
         Key(f"motion.{end}.kind", "str", "none", f"prescribed rotation of the clamped end at {at}: spin_up "
-            "(Simo & Vu-Quoc 1986, rest to motion.rate over motion.time) or harmonic (amplitude sin(2 pi t / time))",
+            "(Simo & Vu-Quoc 1986, rest to motion.rate over motion.time) or harmonic (amplitude "
+            "sin(2 pi t / time); it starts at full speed, an impulsive start whose shock converges slowly in dt)",
             choices=("none", "spin_up", "harmonic")),
         Key(f"motion.{end}.axis", "vec3", (0.0, 0.0, 1.0), f"axis of the prescribed rotation (through the end at {at})"),
         Key(f"motion.{end}.rate", "float", 0.0, "final angular speed of a spin_up", "rad/s"),
@@ -55,8 +56,9 @@ def _end_keys(end: str) -> list[Key]:
         Key(f"motion.{end}.time", "float", 1.0, "spin-up duration, or period of the harmonic rotation", "s", positive),
         Key(f"translation.{end}.kind", "str", "none", f"prescribed displacement d(t) of the clamped or hinged end at "
             f"{at} along translation.{end}.axis: speed_up (from rest to translation.{end}.rate over "
-            f"translation.{end}.time, zero acceleration at both ends) or harmonic (amplitude sin(2 pi t / time)); "
-            "base excitation", choices=("none", "speed_up", "harmonic")),
+            f"translation.{end}.time, zero acceleration at both ends) or harmonic (amplitude sin(2 pi t / time); "
+            "it starts at full speed, an impulsive start whose shock converges slowly in dt); base excitation",
+            choices=("none", "speed_up", "harmonic")),
         Key(f"translation.{end}.axis", "vec3", (0.0, 0.0, 1.0), "direction of the prescribed displacement"),
         Key(f"translation.{end}.rate", "float", 0.0, "final speed of a speed_up", "m/s"),
         Key(f"translation.{end}.amplitude", "float", 0.0, "amplitude of a harmonic displacement", "m"),
