@@ -149,7 +149,7 @@ def _write(out_dir: Path, pb, y, summary: dict) -> None:
     line = pb.centreline(y, u)
     np.savetxt(out_dir / "shape.csv", np.column_stack([u, line]), delimiter=",", header="u,x,y,z", comments="")
     _, N0, s = pb.frame_points
-    write_beam_vtu(out_dir / "static.vtu", np.asarray(N0) @ y.c, y.R, {"s": np.asarray(s, float)})
+    write_beam_vtu(out_dir / "static.vtu", np.asarray(N0) @ y.c, y.R[:len(N0)], {"s": np.asarray(s, float)})
     np.savez(out_dir / "state.npz", **y.arrays())
     write_json(out_dir / "summary.json", summary)
 

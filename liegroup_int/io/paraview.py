@@ -373,8 +373,9 @@ class BeamParaViewWriter(FrameSeriesWriter):
 
     def geometry(self, y) -> tuple[np.ndarray, np.ndarray]:
         """Points ``(m, 3)`` and frames ``(m, 3, 3)`` of a :class:`BeamState`."""
-        points = self._B @ y.c
-        frames = y.R if self._u is None else interpolate_frames(self._u_c, np.asarray(y.R), self._u)
+        points = self._B @ y.c[:self._B.shape[1]]
+        R = np.asarray(y.R)[:len(self._u_c)]  # the centreline's points (a Galerkin state's nodes follow)
+        frames = R if self._u is None else interpolate_frames(self._u_c, R, self._u)
         return points, frames
 
     def _arrays(self, y):

@@ -311,6 +311,14 @@ BODY_KEYS = {
                  "follower)", "N"),
     "couple": Key("couple", "vec3", ZERO, "couple on the body (spatial, dead; material with follower)", "N m"),
     "follower": Key("follower", "bool", False, "the force and couple turn with the body"),
+    "joint": Key("joint", "str", "rigid", "rigid (fixed to the end section), ball (turning freely about the end "
+                 "point) or hinge (turning about axis): on a ball or hinge the body has its own rotation, its "
+                 "offset and axes from the joint point in the end section's reference frame", choices=JOINT_KINDS),
+    "axis": Key("axis", "vec3", ZERO, "hinge axis (spatial, reference configuration; joint = \"hinge\" only)"),
+    "stiffness": Key("stiffness", "float", 0.0, "rotational spring about the hinge axis (joint = \"hinge\" only)",
+                     "N m/rad", non_negative),
+    "damping": Key("damping", "float", 0.0, "rotational damper about the hinge axis (joint = \"hinge\" only)",
+                   "N m s/rad", non_negative),
     **PROFILE_KEYS,
     "table": Key("table", "table", ((0.0, 1.0), (1.0, 1.0)), "[t, factor] points (table)"),
 }
@@ -950,8 +958,14 @@ def _point_rows(pb: BeamProblem, y0: BeamState, fractions) -> np.ndarray:
         s0 = np.cumsum([0.0] + [s[-1] for s, _ in parts])
         s, u = np.concatenate([s + s0[k] for k, (s, _) in enumerate(parts)]), np.concatenate([u for _, u in parts])
     else:
-        s, u = _chords(sp.point_matrix, np.asarray(y0.c, float), 64 * pb.n, 0.0, 1.0)
-    return sp.point_matrix(np.interp(np.asarray(fractions, float) * s[-1], s, u))
+        s, u = _chords(sp.point_matrix, np.asarray(y0.c, float)[:sp.n_ctrl], 64 * pb.n, 0.0, 1.0)
+    return _state_rows(pb, sp.point_matrix(np.interp(np.asarray(fractions, float) * s[-1], s, u)))
+
+
+def _state_rows(pb: BeamProblem, P: np.ndarray) -> np.ndarray:
+    """Basis rows ``P`` ``(k, n_ctrl)`` of the members as rows on the state's control values
+    ``(k, n)``: zero on the nodes of a Galerkin state's bodies on joints, which follow."""
+    return np.hstack([P, np.zeros((P.shape[0], pb.n - P.shape[1]))])
 
 
 def _chords(point_matrix, c: np.ndarray, intervals: int, u0: float, u1: float):
@@ -1037,7 +1051,8 @@ class ShapeRecorder:
             return None
         ctrl = np.asarray(ctrl[...], dtype=float)
         u = np.linspace(0.0, 1.0, self.n_points)
-        line = np.einsum("uj,mjk->muk", self.space.point_matrix(u), ctrl)
+        P = self.space.point_matrix(u)
+        line = np.einsum("uj,mjk->muk", P, ctrl[:, :P.shape[1]])  # the members' control values
         if not getattr(self.space, "chain", True):  # members apart: a NaN point between them
             patch = np.searchsorted(self.space._u_edges[1:-1], u, side="right")
             members = getattr(self.space, "members", None)  # the pieces of a split member stay one line
@@ -1095,7 +1110,8 @@ def _bodies(scene: Scene, space=None) -> tuple:
             load = EndLoad(force=v["force"], couple=v["couple"], force_profile=prof, couple_profile=prof,
                            follower=v["follower"])
             out.append(EndBody(at=side, mass=v["mass"], inertia=tuple(v["inertia"]), patch=patch,
-                               offset=tuple(v["offset"]), load=load))
+                               offset=tuple(v["offset"]), load=load, joint=v["joint"], axis=tuple(v["axis"]),
+                               stiffness=v["stiffness"], damping=v["damping"]))
         except ParameterError as exc:
             raise SceneError(f"{where}: key '{exc.field}': {exc.reason}") from None
     return tuple(out)
@@ -1180,7 +1196,7 @@ def mode_shape(pb: BeamProblem, y0, n_points: int = 101):
     """``Simulation.mode_shape``: a mode's position and rotation increments (control values,
     ``vector[0]`` and ``vector[1]``, complex) on the centreline of the state ``y0`` (the
     initial state; an equilibrium for modes about it) at ``n_points`` parameters."""
-    P = pb.space.point_matrix(np.linspace(0.0, 1.0, n_points))
+    P = _state_rows(pb, pb.space.point_matrix(np.linspace(0.0, 1.0, n_points)))
     ref = P @ np.asarray(y0.c, dtype=float)
     return lambda vec: (ref, P @ np.asarray(vec[0]), P @ np.asarray(vec[1]))
 
@@ -1192,10 +1208,10 @@ def _frames(pb: BeamProblem, fields=()):
     N0, s_c = np.asarray(N0), np.asarray(s_c, dtype=float)
     base = {"s": s_c}
     if not getattr(pb.space, "chain", True):  # a frame that is not a chain: no cell between members
-        base["member"] = np.asarray(pb.gs.point_patch, dtype=float)
+        base["member"] = np.asarray(pb.gs.point_patch[:len(N0)], dtype=float)
     if fields:
-        return lambda y: (N0 @ y.c, y.R, {**base, **pb.section_fields(y, fields)})
-    return lambda y: (N0 @ y.c, y.R, base)
+        return lambda y: (N0 @ y.c, y.R[:len(N0)], {**base, **pb.section_fields(y, fields)})
+    return lambda y: (N0 @ y.c, y.R[:len(N0)], base)
 
 
 #: Largest number of unknowns (12 n_ctrl) for which the guards compute the dense spectrum

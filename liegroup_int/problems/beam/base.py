@@ -232,8 +232,10 @@ class BeamBase(Problem):
         return want
 
     def centreline(self, y, u: np.ndarray) -> np.ndarray:
-        """Centroid positions at parameters ``u``, ``(m, 3)``."""
-        return self.space.point_matrix(u) @ y.c
+        """Centroid positions at parameters ``u``, ``(m, 3)`` (the members' control values: a
+        Galerkin state's nodes come after them)."""
+        P = self.space.point_matrix(u)
+        return P @ y.c[:P.shape[1]]
 
     def is_finite(self, y) -> bool:
         return bool(np.all(np.isfinite(y.c)) and np.all(np.isfinite(y.R)))

@@ -41,6 +41,7 @@ from ...iga.quadrature import DEFAULT_RULE
 from .base import SECTION_FIELDS, BeamBase
 from .kinematics import jr_times, perpendicular_rows, rot, rot_T
 from .model import BoundaryConditions, InitialConditions, Loads, SectionConstants
+from .nodes import NodedSpace
 
 #: Quadrature of the axial and shear terms (``GalerkinBeamProblem(integration=...)``).
 INTEGRATIONS = ("reduced", "full")
@@ -213,6 +214,9 @@ class GalerkinBeamProblem(BeamBase):
         self.integration = integration
         self.quadrature = quadrature
         self.gs = GalerkinSpace(space, rule="gauss-full" if integration == "full" else quadrature)
+        #: the members' control rows and points (the nodes of bodies on joints come after them)
+        self.n_beam, self.m_beam = self.gs.n, self.gs.m
+        self._add_nodes(bodies)
         self.n, self.m = self.gs.n, self.gs.m
         self._section_fields(space, constants)
         g = np.asarray(loads.gravity, float)
@@ -235,14 +239,28 @@ class GalerkinBeamProblem(BeamBase):
                                    or self.translating_ends or self.point_loads
                                    or any(h.damping > 0.0 for h in self.hinges))
 
+    def _add_nodes(self, bodies) -> None:
+        """A node (:mod:`.nodes`) per body on a ball or hinge joint, at its member end."""
+        places = [self._body_place(b) for b in bodies if b.joint != "rigid"]
+        if places:
+            self.gs = NodedSpace(self.gs, places)
+
+    @property
+    def node_points(self) -> np.ndarray:
+        """The points of the nodes (none without bodies on joints)."""
+        return np.arange(self.m_beam, self.m)
+
     def _section_fields(self, space, constants) -> None:
-        """The section stiffnesses and inertias at the points, and the point bases."""
+        """The section stiffnesses and inertias at the points (zero at the nodes), and the
+        point bases."""
         gs, pp = self.gs, self.gs.point_patch
         sections = self._sections(space, constants)
         self.CN = np.array([sec.CN for sec in sections], dtype=float)[pp]
         self.CM = np.array([sec.CM for sec in sections], dtype=float)[pp]
         self.Jm = np.array([sec.Jm for sec in sections], dtype=float)[pp]
         self.mu = np.array([sec.mu for sec in sections], dtype=float)[pp]
+        for a in (self.CN, self.CM, self.Jm, self.mu):
+            a[self.node_points] = 0.0
         self.B0, self.B1 = gs.B0, gs.B1
         self.wf, self.wa = gs.w_full, gs.w_axial
 
@@ -251,18 +269,22 @@ class GalerkinBeamProblem(BeamBase):
         gs = self.gs
         self.has_q = bool(np.any(loads.distributed_force) or np.any(g))
         q_pt = np.asarray(loads.distributed_force, float) + self.mu[:, None] * g
+        q_pt[self.node_points] = 0.0
         #: ``int N_i q ds`` (gravity included), ``(n, 3)``, times the distributed profile
         self.load_vector = gs.B0.T @ (gs.w_full[:, None] * q_pt)
         self.m_dist = np.asarray(loads.distributed_couple, float)
         self.has_m = bool(np.any(self.m_dist))
+        if self.has_m and self.m > self.m_beam:
+            raise ValueError("loads.distributed_couple: not supported with a body on a ball or hinge joint")
         #: ``int mu N_i ds``, ``(n,)``: the linear momentum is ``mass_weights @ v``
         self.mass_weights = gs.weighted_mass(self.mu).sum(axis=0)
 
     def _supports(self, bcs: BoundaryConditions, loads: Loads) -> None:
         """The two ends, the rollers, and the rows with fixed positions and rotations."""
-        n, m = self.n, self.m
+        n = self.n
         self.ends = (self._end(0, 0, -1.0, bcs.start, loads.start, bcs.start_motion, bcs.start_translation),
-                     self._end(n - 1, m - 1, 1.0, bcs.end, loads.end, bcs.end_motion, bcs.end_translation))
+                     self._end(self.n_beam - 1, self.m_beam - 1, 1.0, bcs.end, loads.end, bcs.end_motion,
+                               bcs.end_translation))
         self.moving_ends = tuple(e for e in self.ends if e.motion is not None)
         self.translating_ends = tuple(e for e in self.ends if e.translation is not None)
         #: ``(row, axis)`` of each roller end: its free position component (static analyses)
@@ -295,12 +317,15 @@ class GalerkinBeamProblem(BeamBase):
         """:class:`_GBody` of each end body; their mass joins the momentum weights and their
         weight the load vector (its moment about the end point: :meth:`_body_terms`)."""
         out, seen = [], set()
+        nodes = zip(range(self.n_beam, self.n), range(self.m_beam, self.m))
         for b in bodies:
             row, point = self._body_place(b)
             if row in seen:
                 raise ValueError(f"bodies: two bodies at the {b.at}" + (f" of patch {b.patch}" if b.patch >= 0 else "")
                                  + "; combine them into one")
             seen.add(row)
+            if b.joint != "rigid":  # on its node, in the order of _add_nodes
+                row, point = next(nodes)
             self.mass_weights[row] += b.mass
             self.load_vector[row] += b.mass * g
             self.has_q = self.has_q or bool(b.mass and np.any(g))
@@ -419,7 +444,7 @@ class GalerkinBeamProblem(BeamBase):
     def _body_place(self, b) -> tuple[int, int]:
         """Control row and point of a body's end."""
         if b.patch < 0:
-            return (0, 0) if b.at == "start" else (self.n - 1, self.m - 1)
+            return (0, 0) if b.at == "start" else (self.n_beam - 1, self.m_beam - 1)
         if not hasattr(self.space, "end_row") or b.patch >= len(self.gs.patch_ends):
             raise ValueError(f"bodies: patch {b.patch}: the space has {len(self.gs.patch_ends)} patch(es)")
         ends = self.gs.patch_ends[b.patch]
@@ -449,7 +474,15 @@ class GalerkinBeamProblem(BeamBase):
             kind = kinds[k] if kinds else "rigid"
             D = np.eye(3) if kind == "rigid" else np.zeros((3, 3))
             out.append(_GJoint(a, b, pa, self.gs.R0[pa].T @ self.gs.R0[pb], ld, pb, kind == "rigid", D, kind))
+        for b in self._jointed_bodies():  # a body's node joined to its member end (same reference frame)
+            a, pa = self._body_place(b.body)
+            out.append(_GJoint(a, b.row, pa, np.eye(3), None, b.point, False, np.zeros((3, 3)), b.body.joint))
         return tuple(out)
+
+    def _jointed_bodies(self) -> tuple:
+        """The :class:`_GBody` of the bodies on ball or hinge joints (on their nodes), in
+        the order of their joints after the frame's."""
+        return tuple(b for b in self.bodies if b.body.joint != "rigid")
 
     def _joint_constraints(self) -> dict:
         """``(Y, S^-1 D)`` of the constant joint constraints per field (:meth:`_constraint`)."""
@@ -462,6 +495,11 @@ class GalerkinBeamProblem(BeamBase):
     def _hinges(self, space) -> tuple:
         """:class:`_GHinge` of each hinge pair (after the constant constraints)."""
         axes, springs = getattr(space, "joint_axes", ()), getattr(space, "joint_springs", ())
+        jb = self._jointed_bodies()
+        if jb:  # the frame's pairs, then the bodies'
+            frame = len(self.joints) - len(jb)
+            axes = tuple(axes[:frame]) + tuple(np.asarray(b.body.axis, float) for b in jb)
+            springs = tuple(springs[:frame]) + tuple((b.body.stiffness, b.body.damping) for b in jb)
         out = []
         for k, j in enumerate(self.joints):
             if j.kind != "hinge":
@@ -659,9 +697,11 @@ class GalerkinBeamProblem(BeamBase):
 
     @property
     def frame_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(u, basis, s)`` of the points that carry the rotations ``R``: parameters
-        ``(m,)``, basis values ``(m, n)`` and reference arc lengths ``(m,)``."""
-        return self.gs.u, self.gs.B0, self.gs.s
+        """``(u, basis, s)`` of the members' points, which carry the rotations ``R[:m_beam]``:
+        parameters ``(m_beam,)``, basis values ``(m_beam, n)`` and reference arc lengths
+        ``(m_beam,)`` (the nodes of bodies on joints are not on the centreline)."""
+        mb = self.m_beam
+        return self.gs.u[:mb], self.gs.B0[:mb], self.gs.s[:mb]
 
     def initial_state(self) -> GalerkinBeamState:
         """Reference configuration with the initial velocity field."""
@@ -681,6 +721,8 @@ class GalerkinBeamProblem(BeamBase):
                 w[e.index] = e.motion.velocity(0.0) * (gs.R0[e.point].T @ e.motion.unit_axis)
             elif e.fix_rotation:
                 w[e.index] = 0.0
+        if self.n > self.n_beam:  # the nodes start at their joint points, moving with them
+            c, v = (np.concatenate([x, x[gs.attached_rows]]) for x in (c, v))
         return GalerkinBeamState(c, v, w, R, np.array(gs.K0))
 
     # ------------------------------------------------------------------ RKMK contract
@@ -944,6 +986,10 @@ class GalerkinBeamProblem(BeamBase):
             p += vc - b.body.mass * y.v[b.row]
         return p, h
 
+    def tip(self, y) -> np.ndarray:
+        """Centroid at the end ``s = L``, ``(3,)``."""
+        return y.c[self.ends[1].index].copy()
+
     def section_fields(self, y, names=SECTION_FIELDS) -> dict[str, np.ndarray]:
         """Section quantities at the points (:attr:`frame_points`), ``(m, 3)`` each, as
         :meth:`BeamProblem.section_fields`."""
@@ -958,7 +1004,7 @@ class GalerkinBeamProblem(BeamBase):
             out["velocity"] = self.B0 @ y.v
         if "angular_velocity" in want:
             out["angular_velocity"] = rot(y.R, Om)
-        return {k: out[k] for k in names if k in out}
+        return {k: out[k][:self.m_beam] for k in names if k in out}
 
     def joint_reactions(self, y, t: float = 0.0) -> tuple:
         """Force and couple (spatial) that the first end of each joint pair exerts on the

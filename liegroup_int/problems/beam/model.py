@@ -283,6 +283,15 @@ class EndBody:
     load : EndLoad
         Force and couple on the body, the force acting at its centre of mass (dead, or with
         ``follower`` turning with the body).
+    joint : {"rigid", "ball", "hinge"}
+        How it is attached at the end point: fixed to the end section (``rigid``), or turning
+        freely about the point (``ball``) or about ``axis`` (``hinge``) with its own rotation;
+        then ``offset`` and the principal axes are from the joint point, in the end section's
+        reference frame, and the inertia about the joint must be positive in every direction.
+    axis : (3,) tuple
+        The hinge's axis (spatial, reference configuration; ``joint = "hinge"`` only).
+    stiffness, damping : float
+        The hinge's rotational spring [N m/rad] and damper [N m s/rad] (``"hinge"`` only).
     """
 
     at: str = "end"
@@ -291,6 +300,10 @@ class EndBody:
     patch: int = -1
     offset: tuple = (0.0, 0.0, 0.0)
     load: EndLoad = field(default_factory=EndLoad)
+    joint: str = "rigid"
+    axis: tuple = (0.0, 0.0, 0.0)
+    stiffness: float = 0.0
+    damping: float = 0.0
 
     def __post_init__(self):
         if self.at not in ("start", "end"):
@@ -305,6 +318,31 @@ class EndBody:
         if c.shape != (3,) or not np.all(np.isfinite(c)):
             raise ParameterError("offset", f"expected three finite components, got {self.offset!r}")
         object.__setattr__(self, "offset", tuple(float(x) for x in c))
+        self._check_joint()
+
+    def _check_joint(self) -> None:
+        if self.joint not in ("rigid", "ball", "hinge"):
+            raise ParameterError("joint", f"expected 'rigid', 'ball' or 'hinge', got {self.joint!r}")
+        a = np.asarray(self.axis, dtype=float)
+        if a.shape != (3,) or not np.all(np.isfinite(a)):
+            raise ParameterError("axis", f"expected three finite components, got {self.axis!r}")
+        object.__setattr__(self, "axis", tuple(float(x) for x in a))
+        for name in ("stiffness", "damping"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) >= 0.0):
+                raise ParameterError(name, f"expected a value >= 0, got {getattr(self, name)!r}")
+        if self.joint != "hinge":
+            for name in ("axis", "stiffness", "damping"):
+                if np.any(getattr(self, name)):
+                    raise ParameterError(name, f"only a body on a hinge has an axis, a spring and a damper "
+                                               f"(joint = {self.joint!r})")
+        elif not np.any(a):
+            raise ParameterError("axis", "a body on a hinge needs a non-zero axis [x, y, z]")
+        if self.joint != "rigid":
+            J = np.linalg.eigvalsh(self.end_inertia)
+            if self.mass <= 0.0 or J[0] <= 1e-12 * max(J[-1], 1e-300):
+                raise ParameterError("inertia", f"a body on a {self.joint} turns on its own: it needs a mass > 0 "
+                                                "and an inertia about the joint that is positive in every "
+                                                f"direction (principal values {np.round(J, 12).tolist()})")
 
     @property
     def end_inertia(self) -> np.ndarray:

@@ -96,6 +96,10 @@ class _Unknowns:
     reduction onto them."""
 
     def __init__(self, pb: GalerkinBeamProblem):
+        if any(b.body.joint == "ball" for b in pb.bodies):
+            raise ValueError("static: a body on a ball joint turns freely about the line of its loads through "
+                             "the joint, so its equilibrium is not unique; put it on a hinge (or rigid), or run "
+                             "the dynamics")
         self.pb, n = pb, pb.n
         follower = np.arange(n)  # joint rows b follow rows a: positions at every joint,
         turns = np.arange(n)  # rotations at the rigid ones and the hinges
