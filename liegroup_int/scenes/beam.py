@@ -189,7 +189,8 @@ KEYS = {
             "(\"start\" or \"end\"; in a frame \"<member>.start\", \"<member>.end\" or an interior point "
             "\"<member>@<fraction>\"), mass [kg], inertia (principal moments about the centre of mass along the end "
             "section's d1, d2, d3 [kg m^2]), offset (centre of mass from the end point, section frame [m]), force "
-            "and couple on the body with a time profile (a tip mass, a hub, a payload)"),
+            "and couple on the body with a time profile, joint (rigid; ball or hinge with axis, stiffness, "
+            "damping: the body turns on its own) (a tip mass, a hub, a payload)"),
         Key("output.points", "floats", (), "history of the centreline at these fractions of the reference length "
             "(columns s0p5_x, s0p5_y, s0p5_z for 0.5), e.g. [0.5, 1.0]", "", _fractions),
         Key("output.fields", "strs", (), "section quantities at the collocation points, in results.h5 snapshots "
