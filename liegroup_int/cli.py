@@ -456,6 +456,10 @@ def _modes(args) -> int:
     print(f"{scene.name}: {len(rows)} lowest modes of the linearization {about} ({rep.size} unknowns; "
           f"{_zero_modes_text(KINDS[scene.kind], sim, rep)}; |lambda|max = {rep.lam_max:.4g} 1/s)")
     _modes_table(rows, estimate)
+    if args.about == "initial" and scene.kind == "beam" and _off_equilibrium(sim.problem, state, rep, floor):
+        print(f"note: {scene.source}: the state at t = 0 is at rest but not in equilibrium under the loads there "
+              "(the reference, unstressed), so these modes leave out what the loads do to the stiffness and, under "
+              "gravity, to hanging bodies; modes --about static gives those of the loaded structure", file=sys.stderr)
     grow = [r for r in rows if r["growing"]]
     if grow:
         print(f"warning: {scene.source}: {len(grow)} growing mode(s) {about.split(' (')[0]} (Re lambda > 0, growth by "
@@ -463,6 +467,20 @@ def _modes(args) -> int:
     listed = [made[0].name] + ([made[-1].name, "mode_XX.vtu", "modes.pvd"] if shapes else [])
     print(f"-> {out} ({', '.join(listed)})")
     return 0
+
+
+def _off_equilibrium(problem, y, rep, floor: float) -> bool:
+    """Whether a beam state at rest accelerates under its loads by more than round-off: the
+    largest acceleration over the lowest mode's ``omega^2`` (the displacement it would cause
+    in that mode) above 1e-6 of the structure's size."""
+    import numpy as np
+
+    if np.any(y.v) or np.any(y.w):
+        return False
+    omega = [abs(m.lam) for m in rep.modes if abs(m.lam) > floor]
+    acc = float(np.max(np.abs(problem.vector_field(0.0, y)[2:])))
+    size = float(np.max(np.ptp(np.asarray(y.c), axis=0))) or 1.0
+    return bool(omega) and acc / min(omega) ** 2 > 1e-6 * size
 
 
 def _equilibrium_shape(problem, state):

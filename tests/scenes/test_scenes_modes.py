@@ -136,3 +136,15 @@ def test_modes_without_estimate_says_so(tmp_path, capsys):
     text, rows = _modes_rows(capsys, tmp_path, "--n", "2", "--no-estimate")
     assert "discretization error: not estimated (--no-estimate)" in text
     assert [r["rel_change_finer"] for r in rows] == ["", ""]
+
+
+def test_modes_at_a_loaded_reference_say_it_is_not_an_equilibrium(tmp_path, capsys):
+    """The cantilever at t = 0 carries its tip force on the unstressed reference: ``modes``
+    notes on stderr that the state is not in equilibrium and names ``--about static``;
+    without the force the reference is an equilibrium and nothing is noted."""
+    assert main(["modes", "cantilever", "--n", "2", "--no-estimate", "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert "not in equilibrium under the loads" in err and "--about static" in err and err.count("\n") == 1
+    assert main(["modes", "cantilever", "--n", "2", "--no-estimate", "--set", "loads.end.force=[0,0,0]",
+                 "--out", str(tmp_path / "b")]) == 0
+    assert "equilibrium" not in capsys.readouterr().err
