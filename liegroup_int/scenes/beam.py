@@ -200,7 +200,7 @@ KEYS = {
 }
 
 QUANTITIES = ("tip", "energy", "kinetic", "strain", "momentum", "angular_momentum", "orth_error", "energy_balance",
-              "work", "reactions", "joint_reactions")
+              "work", "reactions", "joint_reactions", "bodies")
 COLUMNS = {
     "tip": ["tip_x", "tip_y", "tip_z"],
     "momentum": ["p_x", "p_y", "p_z"],
@@ -925,6 +925,8 @@ def check(scene: Scene) -> None:
     if "joint_reactions" in scene.output.quantities and not (pb.formulation == "galerkin" and pb.joints):
         raise SceneError(f"{scene.source}: key 'output.quantities': 'joint_reactions' needs a frame's joints "
                          "([[beams]] or [[joints]]) and space.formulation = \"galerkin\"")
+    if "bodies" in scene.output.quantities and not getattr(pb, "bodies", ()):
+        raise SceneError(f"{scene.source}: key 'output.quantities': 'bodies' needs [[bodies]] entries")
     _check_splitting(scene, pb)
     _checked = (scene, pb)
 
@@ -995,6 +997,12 @@ def joint_columns(pb: BeamProblem) -> list[str]:
     return [f"joint{k}_{q}" for k in range(len(getattr(pb, "joints", ()))) for q in ("fx", "fy", "fz", "cx", "cy", "cz")]
 
 
+def body_columns(pb: BeamProblem) -> list[str]:
+    """``body<k>_x .. z`` and ``body<k>_wx .. wz``: the centre of mass and the spatial angular
+    velocity of body ``k`` (:meth:`GalerkinBeamProblem.body_motion`)."""
+    return [f"body{k}_{q}" for k in range(len(getattr(pb, "bodies", ()))) for q in ("x", "y", "z", "wx", "wy", "wz")]
+
+
 def diagnostics(pb: BeamProblem, names, points=None) -> dict:
     """Quantities computed from the state; ``energy_balance`` and ``work`` need the run's
     work of the loads and are added by the runner (liegroup_int/guards.py). ``points``:
@@ -1009,6 +1017,7 @@ def diagnostics(pb: BeamProblem, names, points=None) -> dict:
         "orth_error": lambda t, y: pb.orth_error(y),
         "reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.reactions(y, t).values()]),
         "joint_reactions": lambda t, y: np.concatenate([np.concatenate(fc) for fc in pb.joint_reactions(y, t)]),
+        "bodies": lambda t, y: np.concatenate([np.concatenate(xw) for xw in pb.body_motion(y)]),
     }
     out = {q: table[q] for q in names if q in table}
     if points is not None:
@@ -1179,6 +1188,7 @@ def build(scene: Scene) -> Simulation:
         "columns": {**{k: v for k, v in COLUMNS.items() if k in scene.output.quantities},
                     **({"reactions": reaction_columns(pb)} if "reactions" in scene.output.quantities else {}),
                     **({"joint_reactions": joint_columns(pb)} if "joint_reactions" in scene.output.quantities else {}),
+                    **({"bodies": body_columns(pb)} if "bodies" in scene.output.quantities else {}),
                     **({"points": point_columns(scene["output.points"])} if scene["output.points"] else {})},
     }
     fields = tuple(scene["output.fields"])

@@ -306,6 +306,7 @@ def test_a_body_off_a_driven_end_closes_the_energy_balance(drive):
 
 
 @pytest.mark.parametrize("bodies, over, match", [
+    ([], {"output.quantities": ["tip", "bodies"]}, "'bodies' needs \\[\\[bodies\\]\\] entries"),
     ([{"at": "end", "mass": -1.0}], {}, "key 'mass'"),
     ([{"at": "end", "mass": 1.0}, {"at": "end", "mass": 2.0}], {}, "two bodies at the end"),
     ([{"at": "end", "mass": 1.0}], {"space.formulation": "primal"}, "key 'bodies': end bodies need"),

@@ -108,19 +108,25 @@ def test_a_ball_pendulum_closes_the_energy_balance_and_the_backends_agree():
 
 def test_a_run_with_a_hinged_body_writes_its_outputs(tmp_path):
     """``run`` of the arm with a hinged, sprung body: the history (tip, energy balance,
-    reactions, the joints' reactions), ParaView frames and plots are written, the centreline
-    without the body's node. The energy balance stays at RKMK4's error at the scene's
+    reactions, the joints' reactions, the body's centre and angular velocity), ParaView frames
+    and plots are written, the centreline without the body's node; the body's centre stays
+    0.2 m from the tip, the joint (to round-off). The energy balance stays at RKMK4's error at the scene's
     automatic step (gravity switched on at t = 0 excites the top modes, as on the built-in
     t_frame): 4.3e-7 J measured; asserted 1e-5 J."""
     sc = _scene({"joint": "hinge", "axis": [0.0, 1.0, 0.0], "stiffness": 3.0, "offset": [0.0, -L_ARM, 0.0]},
                 **{"loads.gravity": [0.0, 0.0, -9.81], "t_end": 0.02, "output.every": 0.01,
-                   "output.quantities": ["tip", "energy_balance", "reactions", "joint_reactions"],
+                   "output.quantities": ["tip", "energy_balance", "reactions", "joint_reactions", "bodies"],
                    "output.paraview": True})
     res = run_scene(sc, tmp_path)
     assert res.summary["status"] == "ok"
     h = read_history(tmp_path / "history.csv")
     assert np.max(np.abs(h["energy_balance"])) < 1e-5
     assert {"tip_z", "reaction_start_fz"} <= set(h) and any(k.startswith("joint") for k in h)
+    # the body's centre starts 0.2 m below the tip, and stays 0.2 m from it (the hinge's point)
+    centre = np.stack([h[f"body0_{q}"] for q in "xyz"], axis=1)
+    tip = np.stack([h[f"tip_{q}"] for q in "xyz"], axis=1)
+    assert np.allclose(centre[0], [1.0, 0.0, -L_ARM], atol=1e-12)
+    assert np.allclose(np.linalg.norm(centre - tip, axis=1), L_ARM, rtol=1e-12)
     assert list(tmp_path.glob("*.vtu")) or list(tmp_path.rglob("*.vtu"))
 
 

@@ -986,6 +986,12 @@ class GalerkinBeamProblem(BeamBase):
             p += vc - b.body.mass * y.v[b.row]
         return p, h
 
+    def body_motion(self, y) -> tuple:
+        """Per body its centre of mass ``x + R c`` and spatial angular velocity ``R W``,
+        ``((centre, omega), ...)`` with ``(3,)`` each (``x, R, W`` of its end, or of its node
+        on a joint)."""
+        return tuple((y.c[b.row] + y.R[b.point] @ b.c, y.R[b.point] @ y.w[b.row]) for b in self.bodies)
+
     def tip(self, y) -> np.ndarray:
         """Centroid at the end ``s = L``, ``(3,)``."""
         return y.c[self.ends[1].index].copy()
