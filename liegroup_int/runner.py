@@ -379,7 +379,8 @@ def write_plots(out_dir: Path, scene: Scene, history: Path, shapes: dict | None 
                                  balance_tolerance=scene.guard.energy_balance).name)
     if shapes is not None and len(shapes["t"]) >= 2:
         np.savez_compressed(out_dir / "shapes.npz", **shapes)
-        made.append(plot_shapes(shapes["t"], shapes["centreline"], out_dir / "shapes.png", title=scene.name).name)
+        made.append(plot_shapes(shapes["t"], shapes["centreline"], out_dir / "shapes.png", title=scene.name,
+                                bodies=(shapes.get("body_joint"), shapes.get("body_centre"))).name)
     return made
 
 

@@ -110,7 +110,8 @@ def plot_history(history: dict[str, np.ndarray], path: Path, title: str = "", en
     return save_figure(fig, path, title)
 
 
-def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int = 6, title: str = "") -> Path:
+def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int = 6, title: str = "",
+                bodies=(None, None)) -> Path:
     """Deformed centrelines at ``n_shapes`` times spread over the run, in 3-D and in
     the two projections with the largest extent; a motion that stays in a coordinate plane
     (its extent across it below 1e-9 of the largest) in that plane only.
@@ -121,11 +122,15 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     shapes : (m, k, 3) array
         Centreline points at each time (NaN points break the line, between the members of
         a frame).
+    bodies : ((m, b, 3) array, (m, b, 3) array) or (None, None)
+        The rigid bodies' joint points and centres of mass: a dot at each centre, joined to
+        its point.
     """
     plt = _figures()
     idx = np.unique(np.linspace(0, len(times) - 1, min(n_shapes, len(times))).round().astype(int))
     pts = shapes[idx]
-    flat = shapes.reshape(-1, 3)
+    joint, centre = bodies
+    flat = shapes.reshape(-1, 3) if centre is None else np.concatenate([shapes.reshape(-1, 3), centre.reshape(-1, 3)])
     ext = np.nanmax(flat, axis=0) - np.nanmin(flat, axis=0)
     a, b = sorted(np.argsort(ext)[-2:])
     planar = bool(np.min(ext) <= 1e-9 * np.max(ext))
@@ -139,6 +144,11 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
         if ax3 is not None:
             ax3.plot(p[:, 0], p[:, 1], p[:, 2], color=col, label=label)
         ax2.plot(p[:, a], p[:, b], color=col, label=label)
+        for jp, cp in zip(*((joint[i], centre[i]) if centre is not None else ((), ()))):
+            seg = np.array([jp, cp])
+            if ax3 is not None:
+                ax3.plot(seg[:, 0], seg[:, 1], seg[:, 2], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
+            ax2.plot(seg[:, a], seg[:, b], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
     (ax3 or ax2).legend(fontsize=7, loc="upper left" if ax3 else "best")
     if ax3 is not None:
         ax3.set_xlabel("x1"), ax3.set_ylabel("x2"), ax3.set_zlabel("x3")
@@ -183,12 +193,15 @@ def plot_run(run_dir: Path, times=None, formats=("png", "pdf")) -> list[Path]:
     if shapes.exists():
         with np.load(shapes) as z:
             t, line = z["t"], z["centreline"]
+            bodies = tuple(z[k] if k in z.files else None for k in ("body_joint", "body_centre"))
         if times is not None:
             idx = np.unique([int(np.argmin(np.abs(t - x))) for x in times])
             t, line = t[idx], line[idx]
+            bodies = tuple(b[idx] if b is not None else None for b in bodies)
             n = len(idx)
         else:
             n = 6
         for fmt in formats:
-            made.append(plot_shapes(t, line, run_dir / f"plot_shapes.{fmt}", n_shapes=n, title=run_dir.name))
+            made.append(plot_shapes(t, line, run_dir / f"plot_shapes.{fmt}", n_shapes=n, title=run_dir.name,
+                                    bodies=bodies))
     return made

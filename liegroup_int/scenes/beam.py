@@ -1034,23 +1034,30 @@ class ShapeRecorder:
     ----------
     space : CollocationSpace, optional
         Evaluates the centreline in :meth:`shapes` (without one, only the control points).
+    bodies : sequence of (int, int, (3,) array)
+        The row, point and offset of each rigid body (``GalerkinBeamProblem.bodies``): their
+        joint points and centres join the shapes.
     """
 
-    def __init__(self, space=None, n_points: int = 101):
+    def __init__(self, space=None, n_points: int = 101, bodies=()):
         self.space = space
         self.n_points = n_points
+        self.bodies = tuple((int(r), int(p), np.asarray(c, float)) for r, p, c in bodies)
         self.t: list[float] = []
         self.c: list[np.ndarray] = []
+        self.R: list[np.ndarray] = []
 
     def __call__(self, t, y):
         self.t.append(float(t))
         self.c.append(y.c.copy())
+        self.R.append(y.R[[p for _, p, _ in self.bodies]].copy())
 
     def shapes(self) -> dict | None:
-        """``{"t", "control_points", "u", "centreline"}`` of the recorded outputs
+        """``{"t", "control_points", "u", "centreline"}`` of the recorded outputs, with
+        ``"body_joint"`` and ``"body_centre"`` ``(m, k, 3)`` when there are bodies
         (``Simulation.snapshot``: the runner plots ``centreline`` against ``t`` and stores
         all in shapes.npz); ``None`` before two outputs."""
-        return self.from_snapshots(np.asarray(self.t), {"c": np.asarray(self.c)})
+        return self._shapes(np.asarray(self.t), np.asarray(self.c), np.asarray(self.R))
 
     def from_snapshots(self, t: np.ndarray, snapshots: dict) -> dict | None:
         """:meth:`shapes` from stored snapshots: ``t`` ``(m,)`` and the state arrays of
@@ -1059,7 +1066,14 @@ class ShapeRecorder:
         ctrl = snapshots.get("c")
         if len(t) < 2 or self.space is None or ctrl is None:
             return None
-        ctrl = np.asarray(ctrl[...], dtype=float)
+        R = snapshots.get("R")
+        points = [p for _, p, _ in self.bodies]
+        R = np.asarray(R[...], dtype=float)[:, points] if R is not None and points else None
+        return self._shapes(np.asarray(t), np.asarray(ctrl[...], dtype=float), R)
+
+    def _shapes(self, t: np.ndarray, ctrl: np.ndarray, R) -> dict | None:
+        if len(t) < 2 or self.space is None:
+            return None
         u = np.linspace(0.0, 1.0, self.n_points)
         P = self.space.point_matrix(u)
         line = np.einsum("uj,mjk->muk", P, ctrl[:, :P.shape[1]])  # the members' control values
@@ -1068,7 +1082,12 @@ class ShapeRecorder:
             members = getattr(self.space, "members", None)  # the pieces of a split member stay one line
             member = np.asarray(members)[patch] if members is not None else patch
             line = np.insert(line, np.flatnonzero(np.diff(member)) + 1, np.nan, axis=1)
-        return {"t": np.asarray(t), "control_points": ctrl, "u": u, "centreline": line}
+        out = {"t": np.asarray(t), "control_points": ctrl, "u": u, "centreline": line}
+        if self.bodies and R is not None and R.size:
+            joint = ctrl[:, [r for r, _, _ in self.bodies]]
+            arms = np.array([c for _, _, c in self.bodies])
+            out.update(body_joint=joint, body_centre=joint + np.einsum("mkij,kj->mki", R, arms))
+        return out
 
 
 def auto_step(scene: Scene, pb: BeamProblem, y0) -> dict:
@@ -1193,8 +1212,9 @@ def build(scene: Scene) -> Simulation:
     }
     fields = tuple(scene["output.fields"])
     points = _point_rows(pb, y0, scene["output.points"]) if scene["output.points"] else None
+    shapes = ShapeRecorder(pb.space, bodies=[(b.row, b.point, b.c) for b in getattr(pb, "bodies", ())])
     sim = Simulation(problem=pb, y0=y0, diagnostics=diagnostics(pb, scene.output.quantities, points),
-                     final_state=final_state, info=info, snapshot=ShapeRecorder(pb.space),
+                     final_state=final_state, info=info, snapshot=shapes,
                      to_arrays=lambda y: y.arrays(), from_arrays=lambda a: type(y0)(**a),
                      conserved=pb.mechanical_energy, stability=stability(scene, pb),
                      frames=_frames(pb, fields), mode_shape=mode_shape(pb, y0),

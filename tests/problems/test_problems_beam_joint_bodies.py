@@ -111,7 +111,7 @@ def test_a_run_with_a_hinged_body_writes_its_outputs(tmp_path):
     """``run`` of the arm with a hinged, sprung body: the history (tip, energy balance,
     reactions, the joints' reactions, the body's centre and angular velocity), ParaView frames
     and plots are written, the centreline without the body's node; the body's centre stays
-    0.2 m from the tip, the joint (to round-off). The energy balance stays at RKMK4's error at the scene's
+    0.2 m from the tip, the joint (to round-off), and shapes.npz holds both for the shape plot. The energy balance stays at RKMK4's error at the scene's
     automatic step (gravity switched on at t = 0 excites the top modes, as on the built-in
     t_frame): 4.3e-7 J measured; asserted 1e-5 J."""
     sc = _scene({"joint": "hinge", "axis": [0.0, 1.0, 0.0], "stiffness": 3.0, "offset": [0.0, -L_ARM, 0.0]},
@@ -128,6 +128,9 @@ def test_a_run_with_a_hinged_body_writes_its_outputs(tmp_path):
     tip = np.stack([h[f"tip_{q}"] for q in "xyz"], axis=1)
     assert np.allclose(centre[0], [1.0, 0.0, -L_ARM], atol=1e-12)
     assert np.allclose(np.linalg.norm(centre - tip, axis=1), L_ARM, rtol=1e-12)
+    with np.load(tmp_path / "shapes.npz") as z:  # the shape plot draws the body: its centre and joint point
+        assert np.allclose(np.linalg.norm(z["body_centre"] - z["body_joint"], axis=-1), L_ARM, rtol=1e-12)
+        assert np.allclose(z["body_centre"][-1, 0], centre[-1], atol=1e-12)
     assert list(tmp_path.glob("*.vtu")) or list(tmp_path.rglob("*.vtu"))
 
 
