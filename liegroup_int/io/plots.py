@@ -144,11 +144,8 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
         if ax3 is not None:
             ax3.plot(p[:, 0], p[:, 1], p[:, 2], color=col, label=label)
         ax2.plot(p[:, a], p[:, b], color=col, label=label)
-        for jp, cp in zip(*((joint[i], centre[i]) if centre is not None else ((), ()))):
-            seg = np.array([jp, cp])
-            if ax3 is not None:
-                ax3.plot(seg[:, 0], seg[:, 1], seg[:, 2], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
-            ax2.plot(seg[:, a], seg[:, b], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
+        if centre is not None:
+            _draw_bodies(ax2, ax3, joint[i], centre[i], (a, b), col)
     (ax3 or ax2).legend(fontsize=7, loc="upper left" if ax3 else "best")
     if ax3 is not None:
         ax3.set_xlabel("x1"), ax3.set_ylabel("x2"), ax3.set_zlabel("x3")
@@ -156,6 +153,17 @@ def plot_shapes(times: np.ndarray, shapes: np.ndarray, path: Path, n_shapes: int
     ax2.set_aspect("equal", adjustable="datalim")
     ax2.grid(alpha=0.3)
     return save_figure(fig, path, title)
+
+
+def _draw_bodies(ax2, ax3, joint: np.ndarray, centre: np.ndarray, plane: tuple, col) -> None:
+    """Each body ``(b, 3)`` as a dot at its centre joined to its joint point, in the 3-D axes
+    (if any) and the projection on the coordinates ``plane``."""
+    a, b = plane
+    for jp, cp in zip(joint, centre):
+        seg = np.array([jp, cp])
+        if ax3 is not None:
+            ax3.plot(seg[:, 0], seg[:, 1], seg[:, 2], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
+        ax2.plot(seg[:, a], seg[:, b], color=col, lw=0.8, marker="o", markevery=[1], ms=4)
 
 
 def plot_run(run_dir: Path, times=None, formats=("png", "pdf")) -> list[Path]:
