@@ -141,6 +141,8 @@ def test_a_run_with_a_hinged_body_writes_its_outputs(tmp_path):
     ({"joint": "ball", "inertia": [0.0, 0.0, 0.0], "offset": [0.0, 0.1, 0.0]}, {},
      "key 'inertia': a body on a ball turns on its own"),
     ({"joint": "ball"}, {"loads.distributed_couple": [0.0, 0.0, 1.0]}, "distributed_couple"),
+    ({"joint": "ball"}, {"bodies": [{"at": "end", "mass": M, "inertia": list(J), "joint": "ball"},
+                                    {"at": "end", "mass": M}]}, "one body per end when one is on a ball or hinge"),
 ])
 def test_refusals_are_one_line(body, over, match):
     with pytest.raises(SceneError, match=match) as exc:

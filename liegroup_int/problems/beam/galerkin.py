@@ -316,14 +316,15 @@ class GalerkinBeamProblem(BeamBase):
     def _bodies(self, bodies, g: np.ndarray) -> tuple:
         """:class:`_GBody` of each end body; their mass joins the momentum weights and their
         weight the load vector (its moment about the end point: :meth:`_body_terms`)."""
-        out, seen = [], set()
+        out, seen = [], {}
         nodes = zip(range(self.n_beam, self.n), range(self.m_beam, self.m))
         for b in bodies:
             row, point = self._body_place(b)
             if row in seen:
-                raise ValueError(f"bodies: two bodies at the {b.at}" + (f" of patch {b.patch}" if b.patch >= 0 else "")
-                                 + "; combine them into one")
-            seen.add(row)
+                where = f"bodies: two bodies at the {b.at}" + (f" of patch {b.patch}" if b.patch >= 0 else "")
+                raise ValueError(where + ("; combine them into one" if seen[row] == b.joint == "rigid" else
+                                          "; one body per end when one is on a ball or hinge joint"))
+            seen[row] = b.joint
             if b.joint != "rigid":  # on its node, in the order of _add_nodes
                 row, point = next(nodes)
             self.mass_weights[row] += b.mass

@@ -14,6 +14,7 @@ from math import isfinite, pi
 
 import numpy as np
 
+from ...iga.patches import JOINT_KINDS
 from ..errors import ParameterError
 
 #: End conditions. ``roller``: the end moves along its reference tangent only and does not
@@ -321,8 +322,8 @@ class EndBody:
         self._check_joint()
 
     def _check_joint(self) -> None:
-        if self.joint not in ("rigid", "ball", "hinge"):
-            raise ParameterError("joint", f"expected 'rigid', 'ball' or 'hinge', got {self.joint!r}")
+        if self.joint not in JOINT_KINDS:
+            raise ParameterError("joint", f"expected one of {', '.join(JOINT_KINDS)}, got {self.joint!r}")
         a = np.asarray(self.axis, dtype=float)
         if a.shape != (3,) or not np.all(np.isfinite(a)):
             raise ParameterError("axis", f"expected three finite components, got {self.axis!r}")
