@@ -217,8 +217,11 @@ def main(argv=None) -> None:
     ap.add_argument("--rules", nargs="+", default=None, choices=list(RULES),
                     help="rules to compare (default: all but auto; --quick: gauss-p and gauss-spline)")
     ap.add_argument("--skip", nargs="*", default=[], choices=["spectrum", "energy", "tip", "rollup", "cost"])
+    ap.add_argument("--degrees", nargs="+", type=int, default=None,
+                    help="degrees of the spectrum table (default 4 3 2; --quick: 4)")
     args = ap.parse_args(argv)
     degrees, sizes = ((4,), (11, 21)) if args.quick else ((4, 3, 2), (11, 21, 41))
+    degrees = tuple(args.degrees) if args.degrees else degrees
     cost_sizes, steps = ((21,), 200) if args.quick else ((21, 41, 61, 121), 2000)
     if args.rules is None:
         args.rules = ["gauss-p", "gauss-spline"] if args.quick else [r for r in RULES if r != "auto"]

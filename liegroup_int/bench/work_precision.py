@@ -59,7 +59,7 @@ from ..integrators import (
 )
 from ..integrators.splitting import integrate_composition
 from ..tableaux import COMPOSITIONS
-from ..iga.quadrature import DEFAULT_RULE
+from ..iga.quadrature import DEFAULT_RULE, RULE_DESCRIPTIONS
 from ..scenes import load_scene
 from ..scenes.beam import problem as scene_problem
 from .plans import VARIANTS, Plan
@@ -104,8 +104,9 @@ class Run:
 
 # ----------------------------------------------------------------------------- cache
 #: Part of the cache key of every run of ours: runs cached with another Galerkin stiffness
-#: rule are not reused.
-OURS_TAG = ("space.quadrature", DEFAULT_RULE)
+#: rule are not reused, nor those of another choice of ``auto`` (its description says which
+#: rule it takes where).
+OURS_TAG = ("space.quadrature", DEFAULT_RULE, RULE_DESCRIPTIONS[DEFAULT_RULE])
 
 
 def _key(*parts) -> str:

@@ -20,7 +20,7 @@ import numpy as np
 
 from .bspline import band_widths
 from .collocation import CollocationSpace
-from .quadrature import exact_mass_rule, gauss_points, patch_rule
+from .quadrature import determines_basis, exact_mass_rule, gauss_points, gram, patch_rule
 
 __all__ = ["GalerkinSpace", "BandedSPD", "StrainJacobian", "gauss_points", "reference_strain_jacobian"]
 
@@ -91,15 +91,6 @@ def _patch_points(space: CollocationSpace, rule: str) -> dict:
     return {"rule": r.name, "u": u, "B0": basis[0], "B1": basis[1], "w_full": wb, "w_axial": wa, "R0": R0, "K0": K0,
             "gamma0": np.einsum("nji,nj->ni", R0, t), "s": space.arc_length(u),
             "mass_basis": space.basis_s(um)[0], "mass_weights": wm}
-
-
-def _gram(B: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """``B^T diag(w) B`` ``(n, n)`` of a basis matrix ``B`` ``(m, n)`` with ``p + 1`` non-zeros
-    per row, through sparse products (``O(m p^2)``, not the dense ``O(m n^2)``)."""
-    import scipy.sparse
-
-    S = scipy.sparse.csr_matrix(B)
-    return np.asarray((S.T @ (scipy.sparse.diags(w) @ S)).todense())
 
 
 def _block_diag(blocks) -> np.ndarray:
@@ -184,7 +175,7 @@ class GalerkinSpace:
         self.n = space.n_ctrl
         self._mass_rule = tuple((d["mass_basis"], d["mass_weights"]) for d in parts)
         self.mass = _frozen(self.weighted_mass(np.ones(self.m)))
-        self.point_mass = _frozen(_gram(self.B0, self.w_full))
+        self.point_mass = _frozen(gram(self.B0, self.w_full))
         _check_definite(self.point_mass, rule)
 
     def weighted_mass(self, density: np.ndarray) -> np.ndarray:
@@ -197,7 +188,7 @@ class GalerkinSpace:
             if np.any(density[a:b + 1] != rho):
                 raise ValueError(f"density: expected one value per patch, patch {k} has several")
             Bm, wm = self._mass_rule[k]
-            blocks.append(_gram(Bm, rho * wm))
+            blocks.append(gram(Bm, rho * wm))
         return _block_diag(blocks)
 
     def project(self, values: np.ndarray) -> np.ndarray:
@@ -238,19 +229,9 @@ def reference_strain_jacobian(gs: "GalerkinSpace") -> StrainJacobian:
     return StrainJacobian(g, k)
 
 
-#: Smallest squared Cholesky pivot, relative to its diagonal entry, of a point mass that
-#: determines the basis (a B-spline Gram matrix has pivots of order one; a rule with too
-#: few points leaves one at round-off, of either sign).
-DEFINITE_PIVOT = 1e-10
-
-
 def _check_definite(A: np.ndarray, rule: str) -> None:
     """One-line error if the rule's point mass is not positive definite (too few points
     to determine a spline of the basis)."""
-    try:
-        pivots = BandedSPD(A, np.zeros(A.shape[0], dtype=bool)).factor[-1]
-        if np.min(pivots ** 2 / np.diag(A)) < DEFINITE_PIVOT:  # singular up to round-off
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
+    if not determines_basis(A):
         raise ValueError(f"quadrature rule {rule!r}: its points do not determine the basis "
-                         f"(point mass not positive definite); choose a rule with more points") from None
+                         f"(point mass not positive definite); choose a rule with more points")

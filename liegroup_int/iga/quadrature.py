@@ -32,6 +32,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .bspline import band_widths
 from .knots import greville
 from .spline_quadrature import SplineQuadratureError, gaussian_spline_rule, product_knots
 
@@ -117,37 +118,75 @@ def _greville_rule(space) -> PatchRule:
     return PatchRule(u, w, w.copy())
 
 
-def _spline_points(space) -> PatchRule:
-    """The Gaussian rule of the products ``N_i' N_j``, arc-length weights; raises
+#: Smallest squared Cholesky pivot, relative to its diagonal entry, of a point mass that
+#: determines the basis (a B-spline Gram matrix has pivots of order one; a rule with too
+#: few points leaves one at round-off, of either sign).
+DEFINITE_PIVOT = 1e-10
+
+
+def gram(B: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``B^T diag(w) B`` ``(n, n)`` of a basis matrix ``B`` ``(m, n)`` with ``p + 1`` non-zeros
+    per row, through sparse products (``O(m p^2)``, not the dense ``O(m n^2)``)."""
+    import scipy.sparse
+
+    S = scipy.sparse.csr_matrix(B)
+    return np.asarray((S.T @ (scipy.sparse.diags(w) @ S)).todense())
+
+
+def determines_basis(A: np.ndarray) -> bool:
+    """Whether a point mass ``A`` ``(n, n)`` (banded, symmetric) is positive definite with
+    every squared Cholesky pivot above :data:`DEFINITE_PIVOT` of its diagonal entry."""
+    import scipy.linalg
+
+    lower = band_widths(A)[0]
+    ab = np.zeros((lower + 1, A.shape[0]))  # upper form: ab[lower + i - j, j] = A[i, j]
+    for d in range(lower + 1):
+        ab[lower - d, d:] = np.diagonal(A, d)
+    try:
+        pivots = scipy.linalg.cholesky_banded(ab, lower=False)[-1]
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.min(pivots ** 2 / np.diag(A)) >= DEFINITE_PIVOT)
+
+
+def _spline_points(space, both_derivatives: bool = False) -> PatchRule:
+    """The Gaussian rule of the products ``N_i' N_j`` (of ``N_i' N_j'`` with
+    ``both_derivatives``), arc-length weights; raises
     :class:`.spline_quadrature.SplineQuadratureError` where it is not found."""
     p = space.degree
-    u, w = gaussian_spline_rule(product_knots(space.curve.knots, p), 2 * p - 1)
+    u, w = gaussian_spline_rule(product_knots(space.curve.knots, p, both_derivatives),
+                                2 * p - 2 if both_derivatives else 2 * p - 1)
     w = w * _speed(space, u)
-    return PatchRule(u, w, w.copy(), "gauss-spline")
+    return PatchRule(u, w, w.copy(), "gauss-spline-reduced" if both_derivatives else "gauss-spline")
 
 
-def _gauss_spline_rule(space) -> PatchRule:
+def _spline_rule(both_derivatives: bool):
     """:func:`_spline_points`, or a one-line error naming the fallback."""
-    try:
-        return _spline_points(space)
-    except SplineQuadratureError as exc:
-        raise ValueError(f"quadrature rule 'gauss-spline' at p = {space.degree}: {exc}; choose "
-                         f"space.quadrature = \"gauss-p\"") from None
+    def rule(space) -> PatchRule:
+        try:
+            return _spline_points(space, both_derivatives)
+        except SplineQuadratureError as exc:
+            name = "gauss-spline-reduced" if both_derivatives else "gauss-spline"
+            raise ValueError(f"quadrature rule {name!r} at p = {space.degree}: {exc}; choose "
+                             f"space.quadrature = \"gauss-p\"") from None
+    return rule
 
 
 def _auto_rule(space) -> PatchRule:
-    """``gauss-spline`` for p = 3..7 where its iteration converges (p = 3..6 always), else
-    ``gauss-p`` (at p = 2 gauss-spline is less accurate in the first modes; at p >= 8 its
-    iteration does not converge); ``gauss`` on a patch of one or two knot intervals, where
-    those rules have fewer points than basis functions (a frame's short piece next to a
-    point load)."""
-    if 3 <= space.degree <= 7:
-        try:
-            rule = _spline_points(space)
-            if rule.u.size >= space.n_ctrl:
+    """``gauss-spline-reduced`` for p = 3..6 where it is found and its points determine the
+    basis, else ``gauss-spline`` for p = 3..7 where it is found (p = 3..6 always), else
+    ``gauss-p`` (at p = 2 the spline rules are less accurate in the first modes, or miss the
+    basis; at p >= 8 their iteration does not converge); ``gauss`` on a patch of one or two
+    knot intervals, where those rules have fewer points than basis functions (a frame's
+    short piece next to a point load)."""
+    for reduced in (True, False):
+        if 3 <= space.degree <= (6 if reduced else 7):
+            try:
+                rule = _spline_points(space, reduced)
+            except SplineQuadratureError:
+                continue
+            if rule.u.size >= space.n_ctrl and determines_basis(gram(space.point_matrix(rule.u), rule.w_bending)):
                 return rule
-        except SplineQuadratureError:
-            pass
     rule = RULES["gauss-p"](space)._replace(name="gauss-p")
     return rule if rule.u.size >= space.n_ctrl else RULES["gauss"](space)._replace(name="gauss")
 
@@ -163,7 +202,8 @@ RULES: dict[str, Callable] = {
     "gauss-pm1": _gauss_per_interval(lambda p: (p - 1, p - 1)),
     "gauss-2": _gauss_per_interval(lambda p: (2, 2)),
     "greville": _greville_rule,
-    "gauss-spline": _gauss_spline_rule,
+    "gauss-spline": _spline_rule(False),
+    "gauss-spline-reduced": _spline_rule(True),
     "auto": _auto_rule,
 }
 
@@ -176,8 +216,10 @@ RULE_DESCRIPTIONS = {
     "gauss-2": "2 Gauss points per knot interval for every term",
     "greville": "one point per control point (Greville abscissae), weights exact for the basis",
     "gauss-spline": "Gaussian rule of the products N_i' N_j (exact as gauss-p, about (p + 1) / 2 points per interval)",
-    "auto": "gauss-spline for p = 3..7 where it is found (p = 3..6 always), else gauss-p; gauss on a patch "
-            "too short for either",
+    "gauss-spline-reduced": "Gaussian rule of the products N_i' N_j' (about p / 2 points per interval; the shear's "
+                            "N_i' N_j terms reduced)",
+    "auto": "gauss-spline-reduced for p = 3..6, else gauss-spline for p = 3..7, where found and determining "
+            "the basis; else gauss-p; gauss on a patch too short for these",
 }
 
 

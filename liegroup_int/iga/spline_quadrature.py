@@ -16,7 +16,9 @@ is enlarged by one knot in its middle interval first.
 For the Galerkin beam the space is the one of the products ``N_i' N_j`` of the beam's basis
 (degree ``2p - 1``, continuity one less than the beam's at each knot): the rule integrates the
 stiffness of a straight beam at rest exactly, like ``p`` Gauss points per knot interval, with
-about ``(p + 1) / 2`` points per interval instead of ``p``.
+about ``(p + 1) / 2`` points per interval instead of ``p``. The space of the products
+``N_i' N_j'`` (degree ``2p - 2``, the bending stiffness) has about ``p`` functions per
+interval, so its rule has about ``p / 2`` points per interval.
 """
 
 from __future__ import annotations
@@ -39,9 +41,10 @@ class SplineQuadratureError(ValueError):
     """The moment equations of a spline space were not solved (the iteration stalled)."""
 
 
-def product_knots(knots, degree: int) -> np.ndarray:
-    """Knot vector of the space of products ``N_i' N_j`` of a degree-``p`` basis: degree
-    ``2p - 1``, continuity ``p - r - 1`` at a knot of multiplicity ``r``.
+def product_knots(knots, degree: int, both_derivatives: bool = False) -> np.ndarray:
+    """Knot vector of the space of products ``N_i' N_j`` of a degree-``p`` basis (degree
+    ``2p - 1``), or of ``N_i' N_j'`` with ``both_derivatives`` (degree ``2p - 2``): continuity
+    ``p - r - 1`` at a knot of multiplicity ``r``.
 
     Parameters
     ----------
@@ -49,11 +52,13 @@ def product_knots(knots, degree: int) -> np.ndarray:
         Open knot vector on ``[0, 1]``.
     degree : int
         ``p``.
+    both_derivatives : bool
+        The products of two derivatives (one degree lower).
 
     Returns
     -------
-    numpy.ndarray, shape (D + 2 p,)
-        Open knot vector of degree ``2 p - 1``.
+    numpy.ndarray
+        Open knot vector of degree ``2 p - 1`` (``2 p - 2``).
 
     Raises
     ------
@@ -61,7 +66,7 @@ def product_knots(knots, degree: int) -> np.ndarray:
         At an interior knot of multiplicity ``p`` (products discontinuous there).
     """
     p = int(degree)
-    q = 2 * p - 1
+    q = 2 * p - 2 if both_derivatives else 2 * p - 1
     kv, mult = np.unique(np.asarray(knots, dtype=float), return_counts=True)
     if np.any(mult[1:-1] >= p):
         raise SplineQuadratureError(f"a knot of multiplicity {p} (a C0 joint of the degree-{p} basis) splits the "

@@ -104,10 +104,12 @@ KEYS = {
             "growing mode), or the paper's primal collocation (primal)",
             choices=("primal", "galerkin")),
         Key("space.quadrature", "str", DEFAULT_RULE,
-            "quadrature rule of the galerkin stiffness (auto: gauss-spline for p = 3..7 where it is found, p = 3..6 "
-            "always, else gauss-p, and gauss on a piece of one or two knot intervals; gauss-spline: the Gaussian rule of the spline space of the stiffness, about "
-            "(p + 1) / 2 points per knot interval; gauss-p: p Gauss points per knot interval; both integrate the "
-            "straight beam's stiffness at rest exactly)",
+            "quadrature rule of the galerkin stiffness (auto: gauss-spline-reduced for p = 3..6, else "
+            "gauss-spline for p = 3..7, where found and determining the basis, else gauss-p, and gauss on a piece "
+            "of one or two knot intervals; gauss-spline-reduced: the Gaussian rule of the products N_i' N_j', "
+            "about p / 2 points per knot interval; gauss-spline: of the products N_i' N_j, about (p + 1) / 2; "
+            "gauss-p: p Gauss points per knot interval; the three integrate the straight beam's bending and "
+            "axial stiffness at rest exactly)",
             choices=tuple(RULES)),
         Key("space.n_ctrl", "int", 31, "number of control points (the paper's n + 1; 4 to 2001)", "", _int_between(4, 2001)),
         Key("material.E", "float", None, "Young's modulus", "Pa", positive),

@@ -142,9 +142,14 @@ def test_prestressed_first_frequency_follows_the_axially_loaded_beam():
     ratio f(P)^2 / f(0)^2 agrees with the Euler-Bernoulli ratio at the same fraction of its
     own Euler load to 1e-4: the Simo-Reissner beam adds shear and rotary inertia (its f(0)
     is 1.75e-5 below Euler-Bernoulli's, 3.5e-5 in f^2), which mostly cancel in the ratio
-    (measured differences 5e-7, 2.4e-5, 4.9e-6). The frequency tends to zero like
-    1 - P / P_cr, with the factor 1.076 (0.9) and 1.085 (0.99) of the exact curve: the
-    one-term estimate f^2 = f0^2 (1 - P / P_cr) is 8.5 % low near the critical load."""
+    (measured differences 4e-6 to 6e-6 at 0.3, 5e-6 to 2.6e-5 at 0.9 over the quadrature
+    rules gauss-spline and gauss-spline-reduced, n_ctrl 21 and 31 and BLAS thread counts).
+    At 0.99, f^2 is 1 % of f(0)^2, so the noise of the linearization about the static state
+    (central-difference tangents, the static solve's tolerance) weighs 100 times more:
+    measured -1.1e-4 to +1.0e-4 over the same variants, asserted to 3e-4. The frequency
+    tends to zero like 1 - P / P_cr, with the factor 1.076 (0.9) and 1.085 (0.99) of the
+    exact curve: the one-term estimate f^2 = f0^2 (1 - P / P_cr) is 8.5 % low near the
+    critical load."""
     p_cr = haringx(euler(EI1))
     f0 = prestressed_modes(_column(force=0.0), 1, t=T_END, load_steps=1).report.modes[0].freq_hz
     w0 = eb_omega(0.0)
@@ -153,7 +158,7 @@ def test_prestressed_first_frequency_follows_the_axially_loaded_beam():
         assert pm.static.converged
         ratio = (pm.report.modes[0].freq_hz / f0) ** 2
         eb = (eb_omega(frac * euler(EI1)) / w0) ** 2
-        assert ratio == pytest.approx(eb, rel=1e-4), frac
+        assert ratio == pytest.approx(eb, rel=3e-4 if frac > 0.95 else 1e-4), frac
         if frac > 0.5:
             assert 1.0 < ratio / (1 - frac) < 1.1
     assert ratio < 0.011  # at 0.99 P_cr the first frequency is a tenth of f(0)
@@ -259,16 +264,17 @@ def test_modes_about_static_refuses_collocation(tmp_path, capsys):
 def test_modes_about_static_near_the_buckling_load_pairs_the_finer_mesh(tmp_path, capsys):
     """At 0.99 P_cr the first mode (0.4365 Hz, |lambda| = 1.1e-6 |lambda|max) lies below the
     finer mesh's own near-zero threshold; paired by the coarse mesh's threshold, it moves
-    by 5e-6 to 9e-6 on the finer mesh (measured, with 10 and 2 load steps: the meshes'
-    critical loads differ by 1e-9, times 1 / (1 - P / P_cr) = 100 in f^2, plus the
-    Jacobian's noise), asserted below 1e-4."""
+    by 3e-5 to 1.4e-4 on the finer mesh (measured over the quadrature rules gauss-spline
+    and gauss-spline-reduced and BLAS thread counts: the meshes' critical loads differ by
+    1e-9, and the linearization's noise weighs 1 / (1 - P / P_cr) = 100 times more in
+    f^2), asserted below 5e-4, half the threshold that flags a mode UNCONVERGED."""
     force = float(0.99 * haringx(euler(EI1)))
     assert main(["modes", "column", "--about", "static", "--n", "1", "--steps", "2",
                  "--set", f"loads.end.force=[0, 0, {-force!r}]", "--out", str(tmp_path)]) == 0
     text = capsys.readouterr().out
     row = next(csv.DictReader(open(tmp_path / "modes.csv")))
     assert float(row["freq_hz"]) == pytest.approx(0.4365, rel=1e-3)
-    assert float(row["rel_change_finer"]) < 1e-4 and "UNCONVERGED" not in text
+    assert float(row["rel_change_finer"]) < 5e-4 and "UNCONVERGED" not in text
 
 
 def test_lateral_torsional_buckling_of_a_narrow_cantilever():

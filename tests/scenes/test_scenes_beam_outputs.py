@@ -81,13 +81,13 @@ def test_fields_in_hdf5_and_paraview_only_when_asked(tmp_path):
         snaps = f["snapshots"]
         assert {"section_n", "section_Gamma", "section_velocity"} <= set(snaps)
         # at the points that carry the rotations: Galerkin, p = 4, n_ctrl = 31, the
-        # gauss-spline rule: half the 138 B-splines of its product space (69 nodes) and
-        # both ends, 71
-        assert "section_m" not in snaps and snaps["section_n"].shape[1:] == (71, 3)
+        # gauss-spline-reduced rule: half the 112 B-splines of its product space (56 nodes)
+        # and both ends, 58
+        assert "section_m" not in snaps and snaps["section_n"].shape[1:] == (58, 3)
         # velocity at those points is B0 v; the first is s = 0: the hinge point does not move
         assert np.max(np.abs(snaps["section_velocity"][:, 0])) < 1e-12
     m = meshio.read(sorted(glob.glob(str(tmp_path / "a" / "paraview" / "*.vtu")))[-1])
-    assert {"n", "Gamma", "velocity"} <= set(m.point_data) and m.point_data["n"].shape == (71, 3)
+    assert {"n", "Gamma", "velocity"} <= set(m.point_data) and m.point_data["n"].shape == (58, 3)
     _run(tmp_path / "b")
     with h5py.File(tmp_path / "b" / "results.h5") as f:
         assert not [k for k in f["snapshots"] if k.startswith("section_")]
@@ -100,9 +100,11 @@ def test_section_fields_at_rest_and_unknown_names():
     pb = sim.problem
     f = pb.section_fields(sim.y0)
     # unstressed reference state at rest: strains at round-off, resultants at round-off
-    # times the stiffness (EA = 2.1e7 N: 4e-8 N)
+    # times the stiffness (EA = 2.1e7 N). The strain x' sums p + 1 = 5 terms of size
+    # |N'| |x| ~ p (n_ctrl - p) / L ~ 100 that cancel to 1, so its round-off is up to about
+    # 5 * 100 * 2.2e-16 = 1.1e-13 (measured 1.4e-14)
     scale = {"N": np.max(pb.CN), "n": np.max(pb.CN), "M": np.max(pb.CM), "m": np.max(pb.CM)}
-    assert all(np.max(np.abs(v)) <= 1e-14 * scale.get(k, 1.0) for k, v in f.items()), {
+    assert all(np.max(np.abs(v)) <= 1.1e-13 * scale.get(k, 1.0) for k, v in f.items()), {
         k: float(np.max(np.abs(v))) for k, v in f.items()}
     with pytest.raises(ValueError, match="unknown section field"):
         sim.problem.section_fields(sim.y0, ("shear",))

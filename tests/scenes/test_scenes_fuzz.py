@@ -142,15 +142,15 @@ def test_extreme_settings_refused_before_writing(tmp_path, capsys, sets, expecte
 
 
 def test_auto_step_counts_checked_after_the_step_is_known(tmp_path, capsys):
-    """dt = "auto" is resolved when the beam is built (9.55e-5 s for the Galerkin pendulum,
+    """dt = "auto" is resolved when the beam is built (9.85e-5 s for the Galerkin pendulum,
     so outputs every 1e-4 s land on every step): the output count is checked then, still
     before anything is written."""
     out = tmp_path / "out"
     assert main(["run", "pendulum", "--quiet", "--out", str(out), "--set", "t_end=100", "--set", "output.every=1e-4",
                  "--set", "integrator.dt=auto"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "1.05e+06 outputs over 100 s, more than 1e+06" in err
-    assert "give output.every >= 0.000191 s" in err and not out.exists()
+    assert err.count("\n") == 1 and "1.02e+06 outputs over 100 s, more than 1e+06" in err
+    assert "give output.every >= 0.000197 s" in err and not out.exists()
 
 
 def test_disk_estimate_bounds_a_real_run(tmp_path):
