@@ -20,7 +20,12 @@ Registered rules (:data:`RULES`):
   al., CMAME 380, 2021);
 * ``"gauss-spline"``: the Gaussian rule of the space of products ``N_i' N_j``
   (:mod:`.spline_quadrature`): exact where ``gauss-p`` is exact on a straight beam, with about
-  ``(p + 1) / 2`` points per knot interval.
+  ``(p + 1) / 2`` points per knot interval;
+* ``"gauss-spline-reduced"``: the Gaussian rule of the space of products ``N_i' N_j'``: exact
+  on the bending and axial stiffness of a straight beam at rest, reduced on the shear's
+  ``N_i' N_j`` terms, with about ``p / 2`` points per knot interval;
+* ``"auto"`` (:data:`DEFAULT_RULE`): ``gauss-spline-reduced`` for p = 3..6, else
+  ``gauss-spline``, else ``gauss-p`` (:func:`_auto_rule`).
 
 The consistent mass matrix does not depend on the rule (:func:`exact_mass_rule`, ``p + 1``
 Gauss points per interval).

@@ -188,8 +188,9 @@ class GalerkinBeamProblem(BeamBase):
         the default: locking-free at low degree) or ``p + 1`` (the rule ``"gauss-full"``).
     quadrature : str
         Quadrature rule of the stiffness (:data:`liegroup_int.iga.quadrature.RULES`) with
-        ``integration = "reduced"``; ``"auto"`` (the default): the Gaussian spline rule
-        ``"gauss-spline"`` where it is found for p = 3..7, else ``"gauss-p"``.
+        ``integration = "reduced"``; ``"auto"`` (the default): the reduced Gaussian spline
+        rule ``"gauss-spline-reduced"`` for p = 3..6, else ``"gauss-spline"`` for p = 3..7,
+        where found and determining the basis, else ``"gauss-p"``.
     bodies : tuple of EndBody
         Rigid bodies fixed to the ends (at most one per end): their mass and inertia about
         the end point join the end rows of the consistent mass matrices (the B-spline basis
