@@ -554,8 +554,22 @@ def _start(scene: Scene, resume: dict | None) -> _Start:
     stats = Stats(steps=st["steps"], rejected=st["rejected"], rhs_evals=st["rhs_evals"],
                   wall_time_s=st["wall_time_s"], h_min=st["h_min"], h_max=st["h_max"],
                   quadrature=st.get("quadrature", 0.0), controller=meta.get("controller"))
-    return _Start(sim, dt, tab, t0, sim.from_arrays(resume["state"]), stats, meta["every"], meta.get("energy0"),
-                  **_strides(scene, meta["every"], meta))
+    y0 = sim.from_arrays(_checked_state(sim, resume["state"], resume.get("path", scene.source)))
+    return _Start(sim, dt, tab, t0, y0, stats, meta["every"], meta.get("energy0"), **_strides(scene, meta["every"], meta))
+
+
+def _checked_state(sim, state: dict, where: str) -> dict:
+    """The checkpoint's state arrays, or a one-line error when their names or shapes are not
+    those of the scene's discretization as it builds now (its points changed: another
+    quadrature rule or mesh, as ``space.quadrature = "auto"`` may resolve differently)."""
+    want = {k: np.shape(v) for k, v in sim.to_arrays(sim.y0).items()}
+    got = {k: np.shape(v) for k, v in state.items()}
+    for name in sorted(want.keys() | got.keys()):
+        if want.get(name) != got.get(name):
+            raise SceneError(f"{where}: the checkpoint's state '{name}' has shape {got.get(name)}, the scene as it "
+                             f"builds now has {want.get(name)} (its discretization's points differ, e.g. another "
+                             f"quadrature rule); the run cannot be resumed: start a new run")
+    return state
 
 
 def _output_warnings(scene: Scene, start: _Start) -> list[str]:

@@ -28,9 +28,10 @@ def write_checkpoint(path: Path, t: float, state: dict, stats: dict, meta: dict)
 
 
 def read_checkpoint(path: Path) -> dict:
-    """``{"t": float, "state": {name: array}, "stats": dict, "meta": dict}``."""
+    """``{"t": float, "state": {name: array}, "stats": dict, "meta": dict, "path": str}``."""
     with np.load(path, allow_pickle=False) as z:
         return {
+            "path": str(path),
             "t": float(z["t"]),
             "state": {k.split("/", 1)[1]: z[k].copy() for k in z.files if k.startswith("state/")},
             "stats": json.loads(str(z["stats"])),

@@ -199,6 +199,32 @@ def test_a_run_without_checkpoint_is_restarted_with_overwrite(tmp_path, capsys):
     assert json.loads((out / "summary.json").read_text())["status"] == "ok"
 
 
+def test_a_checkpoint_whose_points_differ_is_refused_in_one_line(tmp_path, capsys):
+    """A Galerkin checkpoint holds the rotations at the quadrature points. One written with
+    ``gauss-spline`` (71 points at n_ctrl = 31) but recorded as ``space.quadrature =
+    "auto"``, which now builds ``gauss-spline-reduced`` (58 points): --resume says which
+    state array differs and where, exits 2 and leaves the run directory as it was (without
+    the check the compiled kernels read past the arrays and the process aborted)."""
+    out = tmp_path / "run"
+    assert main(["run", "pendulum", "--quiet", "--no-plots", "--out", str(out), "--set", "t_end=0.01",
+                 "--set", "space.quadrature=gauss-spline"]) == 0
+    ck = out / "checkpoint.npz"
+    with np.load(ck, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(str(arrays["meta"]))
+    meta["scene_keys"]["space.quadrature"] = "auto"
+    arrays["meta"] = np.array(json.dumps(meta))
+    np.savez(ck, **arrays)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    capsys.readouterr()
+    assert main(["run", "--quiet", "--resume", str(out), "--set", "t_end=0.02"]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"error: {ck}: the checkpoint's state 'K' has shape (71, 3), the scene as it builds now has "
+                   f"(58, 3) (its discretization's points differ, e.g. another quadrature rule); the run cannot be "
+                   f"resumed: start a new run\n")
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
 def test_energy_guard_stops_an_exploding_energy(tmp_path):
     from liegroup_int.integrators import BlowUpError, Stats
     from liegroup_int.io import HistoryWriter
