@@ -61,7 +61,8 @@ def test_rollup_matches_the_circle(f):
     assert np.linalg.norm(pb.tip(res.state) - _circle_tip(f)) < 1e-5
 
 
-@pytest.mark.parametrize("rule,low,high", [("gauss-p", 5.5, 7.0), ("gauss-spline", 5.5, 9.0), ("gauss-spline-reduced", 5.5, 9.0)])
+@pytest.mark.parametrize("rule,low,high", [("gauss-p", 5.5, 7.0), ("gauss-spline", 5.5, 9.0),
+                                           ("gauss-spline-reduced", 5.5, 9.0)])
 @pytest.mark.parametrize("f", [0.25, 0.5, 1.0])
 def test_rollup_error_falls_at_twice_the_degree(f, rule, low, high):
     """Tip error against the exact circle at p = 3 on 9, 13 and 21 knot intervals
