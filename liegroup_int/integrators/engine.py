@@ -555,7 +555,12 @@ class FunctionValue(nbtypes.WrapperAddressProtocol):
     ``numba.types.FunctionType``) whose address is looked up once. Given the dispatcher
     itself, numba looks its compiled wrapper up again at every call of a loop (about 40 us
     a function, more than a one-step call's whole work). Numba's wrapper address protocol
-    (``__wrapper_address__``, ``signature``); the address is not pickled."""
+    (``__wrapper_address__``, ``signature``); the address is not pickled.
+
+    The overload is looked up by its argument types first, as a call from Python does:
+    numba keys its disk cache by the signature it compiles for, and asked for the full
+    signature (with the return type) it would miss the entry that a call from Python, or
+    ``liegroup-int compile``, wrote, and compile the kernel again."""
 
     def __init__(self, fn, ftype):
         self.fn, self.ftype, self._address = fn, ftype, None
@@ -564,7 +569,11 @@ class FunctionValue(nbtypes.WrapperAddressProtocol):
         if self._address is None:
             from numba.experimental.function_type import _get_wrapper_address
 
-            self._address = _get_wrapper_address(self.fn, self.ftype.signature)
+            sig = self.ftype.signature
+            overloads = getattr(self.fn, "overloads", None)
+            if overloads is not None and tuple(sig.args) not in overloads:
+                self.fn.compile(tuple(sig.args))  # loads the entry a call from Python cached
+            self._address = _get_wrapper_address(self.fn, sig)
         return self._address
 
     def signature(self):

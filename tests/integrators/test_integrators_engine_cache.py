@@ -4,6 +4,7 @@ compiling (numba ``cache=True`` through the engine's per-plugin copies), also fo
 anew in each process still finds the loops in the cache."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -45,3 +46,42 @@ def test_a_second_process_loads_the_compiled_loops():
                            "user.advance_adaptive"}
     for name, (hits, misses) in second.items():
         assert (hits, misses) == (1, 0), (name, hits, misses)
+
+
+KERNEL = """
+from numba import njit
+
+
+@njit(cache=True)
+def kernel(x):
+    return x + 1.0
+"""
+
+ADDRESS = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from numba import types
+from liegroup_int.integrators.engine import FunctionValue
+import kmod
+FunctionValue(kmod.kernel, types.FunctionType(types.float64(types.float64))).__wrapper_address__()
+st = kmod.kernel.stats
+print(json.dumps([sum(st.cache_hits.values()), sum(st.cache_misses.values())]))
+"""
+
+
+def test_a_function_value_loads_what_a_call_from_python_cached(tmp_path):
+    """A kernel called from Python once (as ``liegroup-int compile`` warms the beam's stage
+    rate) and then, in a new process, taken by its address as a first-class function value
+    (as the engine's loops take it): the second process loads it from the disk cache, one
+    hit and no miss. Looked up by its full signature (with the return type), numba missed
+    that entry and compiled the kernel again (measured: the Galerkin stage rate and action,
+    6.8 s, on the first ``integrate`` after ``liegroup-int compile``)."""
+    (tmp_path / "kmod.py").write_text(KERNEL)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    call = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import kmod; print(kmod.kernel(1.0))"
+    first = subprocess.run([sys.executable, "-c", call], capture_output=True, text=True, timeout=300, env=env,
+                           check=True)
+    assert first.stdout.strip() == "2.0"
+    done = subprocess.run([sys.executable, "-c", ADDRESS, str(tmp_path)], capture_output=True, text=True,
+                          timeout=300, env=env, check=True)
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == [1, 0]
