@@ -154,6 +154,10 @@ def determines_basis(A: np.ndarray) -> bool:
     return bool(np.min(pivots ** 2 / np.diag(A)) >= DEFINITE_PIVOT)
 
 
+#: The names of the Gaussian spline rules, by ``both_derivatives``.
+_SPLINE_RULES = {False: "gauss-spline", True: "gauss-spline-reduced"}
+
+
 def _spline_points(space, both_derivatives: bool = False) -> PatchRule:
     """The Gaussian rule of the products ``N_i' N_j`` (of ``N_i' N_j'`` with
     ``both_derivatives``), arc-length weights; raises
@@ -162,7 +166,7 @@ def _spline_points(space, both_derivatives: bool = False) -> PatchRule:
     u, w = gaussian_spline_rule(product_knots(space.curve.knots, p, both_derivatives),
                                 2 * p - 2 if both_derivatives else 2 * p - 1)
     w = w * _speed(space, u)
-    return PatchRule(u, w, w.copy(), "gauss-spline-reduced" if both_derivatives else "gauss-spline")
+    return PatchRule(u, w, w.copy(), _SPLINE_RULES[both_derivatives])
 
 
 def _spline_rule(both_derivatives: bool):
@@ -171,7 +175,7 @@ def _spline_rule(both_derivatives: bool):
         try:
             return _spline_points(space, both_derivatives)
         except SplineQuadratureError as exc:
-            name = "gauss-spline-reduced" if both_derivatives else "gauss-spline"
+            name = _SPLINE_RULES[both_derivatives]
             raise ValueError(f"quadrature rule {name!r} at p = {space.degree}: {exc}; choose "
                              f"space.quadrature = \"gauss-p\"") from None
     return rule
