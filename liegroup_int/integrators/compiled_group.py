@@ -243,7 +243,7 @@ def user_field(data, t, y, out):
 def _user_rate(data, t, y, u, out):
     """``out = dexpinv_u f(t, y)``."""
     user_field(data, t, y, out)
-    dexpinv_flat(data[0], data[1], data[2], u, out, out, 0)
+    group_dexpinv(data, u, out, out)
     return 0.0
 
 

@@ -341,9 +341,8 @@ def _solve(d, w, out, R, u1):
         _prescribe(out[2], d.Cp, fp, keep, 8, q)
     chol_solve9(d.U, d.dinv, out[2], out[1], out[3])
     if d.joint_ab.shape[0]:  # calls skipped when there is nothing to constrain (a stage's fixed cost)
-        _constrain(out[1], d.joint_ab, d.joint_q, d.Y[1], d.Sinv[1], True, d.jr)
-        _constrain(out[3], d.joint_ab, d.joint_q, d.Y[2], d.Sinv[2], True, d.jr)
-        _constrain(out[2], d.joint_ab, d.joint_q, d.Y[0], d.Sinv[0], False, d.jr)
+        for k in range(3):  # Theta', W, then the positions; one compiled copy (``k < 2`` is not a literal)
+            _constrain(out[(1, 3, 2)[k]], d.joint_ab, d.joint_q, d.Y[(1, 2, 0)[k]], d.Sinv[(1, 2, 0)[k]], k < 2, d.jr)
     if d.hinge_S.shape[0]:
         for field in range(2):  # one compiled copy for both fields (a loop index is not a literal)
             _constrain_hinges(out[1 + 2 * field], d, R, w, u1, field, 1.0)
@@ -530,9 +529,12 @@ ENGINE_KERNELS = ad.engine_kernels("beam_galerkin", 5)
 @njit(cache=True, inline="always")
 def _accelerations(data, t, y, zero, out):
     """The accelerations ``out[2], out[3]`` at ``(t, y)`` (a zero increment, without the
-    rotational increment's rate); returns the power as :func:`rates`."""
+    rotational increment's rate); returns the power as :func:`rates`. ``kin`` is passed as
+    a value computed at run time (false: the increment is zero), not as the constant
+    ``False``, which numba would type as a literal and compile :func:`rates` for anew (7 s
+    more for the splitting kernel) instead of loading the stage rate's compiled copy."""
     set_loads(data[0].loads, data[1], data[2], data[3], t)
-    return rates(y[0], y[1], y[2], y[3], y[4], zero, out, data[0], False)
+    return rates(y[0], y[1], y[2], y[3], y[4], zero, out, data[0], zero[0, 0, 0] != 0.0)
 
 
 @njit(cache=True, inline="always")

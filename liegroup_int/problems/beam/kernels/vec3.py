@@ -112,15 +112,13 @@ def norm(a):
 
 # symmetric 3x3 matrices as 6-tuples (s00, s01, s02, s11, s12, s22)
 @njit(cache=True)
-def _inertia_entry(R, i, J, a, b):
-    return R[i, a, 0] * J[0] * R[i, b, 0] + R[i, a, 1] * J[1] * R[i, b, 1] + R[i, a, 2] * J[2] * R[i, b, 2]
-
-
-@njit(cache=True)
 def inertia(R, i, J):
-    """The spatial inertia ``R[i] diag(J) R[i]^T`` (symmetric)."""
-    return (_inertia_entry(R, i, J, 0, 0), _inertia_entry(R, i, J, 0, 1), _inertia_entry(R, i, J, 0, 2),
-            _inertia_entry(R, i, J, 1, 1), _inertia_entry(R, i, J, 1, 2), _inertia_entry(R, i, J, 2, 2))
+    """The spatial inertia ``R[i] diag(J) R[i]^T`` (symmetric); its rows taken here, so no
+    helper is called with constant indices (numba compiles a copy per constant)."""
+    r0, r1, r2 = (R[i, 0, 0], R[i, 0, 1], R[i, 0, 2]), (R[i, 1, 0], R[i, 1, 1], R[i, 1, 2]), \
+        (R[i, 2, 0], R[i, 2, 1], R[i, 2, 2])
+    j0, j1, j2 = mul(J, r0), mul(J, r1), mul(J, r2)
+    return dot(j0, r0), dot(j0, r1), dot(j0, r2), dot(j1, r1), dot(j1, r2), dot(j2, r2)
 
 
 @njit(cache=True)
