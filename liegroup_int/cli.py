@@ -493,7 +493,7 @@ def _equilibrium_shape(problem, state):
 def _compile(args) -> int:
     import time
 
-    from .precompile import DEFAULT_SETS, KERNEL_SETS, compile_sets
+    from .precompile import DEFAULT_SETS, KERNEL_SETS, compile_sets, write_bytecode
 
     if args.list:
         for name, ks in KERNEL_SETS.items():
@@ -511,6 +511,7 @@ def _compile(args) -> int:
         raise SceneError(f"compile: --jobs {args.jobs}: expected a positive number of processes")
     print(f"compiling {len(names)} kernel set(s): {', '.join(names)} (cached for later runs)", file=sys.stderr)
     c = time.perf_counter()
+    write_bytecode()  # first: the worker processes then import the package from it
     compile_sets(names, args.jobs, report=lambda n, s: print(f"  {n}: {s:.1f} s", file=sys.stderr))
     print(f"compiled in {time.perf_counter() - c:.1f} s", file=sys.stderr)
     return 0

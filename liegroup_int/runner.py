@@ -452,6 +452,8 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     compile_s = warm_up(start.sim.problem, start.tab, start.t0, start.y0, start.dt)
     if compile_s > 2.0 and not quiet:
         print(f"compiled the step loop in {compile_s:.1f} s (first run only: cached for later runs)", file=sys.stderr)
+    # the compiled loops release the GIL; without one (0 s), a thread would only compete for it
+    plots_ready = _preload_plots() if scene.output.plots and compile_s > 0.0 else None
     t_loop = time.perf_counter()
     end = _integrate(scene, start, outs, out_dir, quiet, resume is not None, watcher)
     loop_s = time.perf_counter() - t_loop
@@ -463,11 +465,36 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
         summary["wall_time_s"] = loop_s
     summary["timing"] = _timing(compile_s, load_s + t_loop - clock0 - compile_s, loop_s, outs.output_s[0])
     summary["plots"] = []
-    _finish(scene, start, outs, end, out_dir, summary)
+    _finish(scene, start, outs, end, out_dir, summary, plots_ready)
     return RunResult(out_dir, summary, outs.history)
 
 
-def _finish(scene: Scene, start: "_Start", outs: "_Outputs", end: "_End", out_dir: Path, summary: dict) -> None:
+def _preload_plots() -> threading.Thread:
+    """A started daemon thread that prepares the plotting library (:func:`.io.plots.preload`)
+    while the compiled loop integrates with the GIL released; :func:`_plots` joins it. While
+    it runs, Python's thread switch interval is 0.1 ms instead of 5: the loop returns to
+    Python at every output time and would otherwise wait up to 5 ms for the GIL each time.
+    An error there is left to the plots themselves, which import the same modules."""
+    from .io.plots import preload
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(min(interval, 1e-4))
+
+    def run():
+        try:
+            preload()
+        except Exception:  # noqa: BLE001 (the plots report it, in the main thread)
+            pass
+        finally:
+            sys.setswitchinterval(interval)
+
+    th = threading.Thread(target=run, name="preload-plots", daemon=True)
+    th.start()
+    return th
+
+
+def _finish(scene: Scene, start: "_Start", outs: "_Outputs", end: "_End", out_dir: Path, summary: dict,
+            plots_ready: threading.Thread | None = None) -> None:
     """Write the summary (complete before the plots: a slow or killed plot loses nothing
     computed), then the plots unless a write failed; raise :class:`RunError` for a run that
     stopped early or whose summary cannot be written."""
@@ -475,7 +502,7 @@ def _finish(scene: Scene, start: "_Start", outs: "_Outputs", end: "_End", out_di
     try:
         write_json(out_dir / "summary.json", summary)
         if scene.output.plots and not end.write_failed:
-            _plots(scene, start, outs, out_dir, summary)
+            _plots(scene, start, outs, out_dir, summary, plots_ready)
     except WRITE_ERRORS as exc:
         error = error or f"{scene.name}: {_write_error(exc, out_dir / 'summary.json')}"
     if error is not None:
@@ -926,10 +953,13 @@ def _summary_tail(scene: Scene, start: _Start, outs: _Outputs, end: _End) -> dic
     return tail
 
 
-def _plots(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, summary: dict) -> None:
-    """The run's plots, drawn after the summary is written; their names and time are added
-    to it."""
+def _plots(scene: Scene, start: _Start, outs: _Outputs, out_dir: Path, summary: dict,
+           plots_ready: threading.Thread | None = None) -> None:
+    """The run's plots, drawn after the summary is written (once ``plots_ready``, the
+    preloading thread, has finished); their names and time are added to it."""
     c = time.perf_counter()
+    if plots_ready is not None:
+        plots_ready.join()
     shapes = None
     if start.sim.snapshot is not None:
         shapes = _shapes(start.sim.snapshot, out_dir / "results.h5" if outs.h5 is not None else None)

@@ -239,3 +239,23 @@ def test_a_slow_scene_check_says_so_and_counts_as_set_up(monkeypatch, tmp_path, 
                  "--out", str(out)]) == 0
     assert capsys.readouterr().err.count("setting up heavy_top (more than 0.05 s") == 1
     assert json.loads((out / "summary.json").read_text())["timing"]["setup_s"] >= 0.3
+
+
+def test_compile_writes_the_package_bytecode():
+    """``compile`` writes each module's bytecode where Python reads it (``__pycache__``), so
+    that no process compiles the package's sources again, even where Python would not
+    write it (an editable install with ``PYTHONDONTWRITEBYTECODE``)."""
+    import importlib.util
+    from pathlib import Path
+
+    import liegroup_int
+    from liegroup_int.precompile import write_bytecode
+
+    root = Path(liegroup_int.__file__).parent
+    own = Path(importlib.util.cache_from_source(str(root / "precompile.py")))
+    own.unlink(missing_ok=True)  # imported already: nothing reads it again here
+    assert write_bytecode()
+    sources = sorted(root.rglob("*.py"))
+    assert len(sources) > 50
+    missing = [p for p in sources if not Path(importlib.util.cache_from_source(str(p))).exists()]
+    assert missing == []

@@ -543,8 +543,10 @@ def engine_for(kernels: EngineKernels) -> Engine:
         copy.__qualname__ = f"{tag}.{name}"
         copy.__doc__ = fn.__doc__
         # the step and the helpers are inlined into the two loops (numba IR inlining)
-        inline = "never" if name in ("_advance_fixed", "_advance_adaptive") else "always"
-        ns[name] = njit(cache=kernels.cache, inline=inline)(copy)
+        loop = name in ("_advance_fixed", "_advance_adaptive")
+        # the loops release the GIL: a caller's other threads run while they integrate
+        ns[name] = njit(cache=kernels.cache, inline="never", nogil=True)(copy) if loop else \
+            njit(cache=kernels.cache, inline="always")(copy)
     eng = Engine(kernels, ns["_advance_fixed"], ns["_advance_adaptive"])
     _ENGINES[kernels] = eng
     return eng
