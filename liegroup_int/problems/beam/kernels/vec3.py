@@ -90,6 +90,18 @@ def put_at(A, i, q, a):
 
 
 @njit(cache=True)
+def col(A, q, i):
+    """``A[q:q+3, i]`` of a ``(rows, m)`` array of per-point values stored by rows."""
+    return A[q, i], A[q + 1, i], A[q + 2, i]
+
+
+@njit(cache=True)
+def put_col(A, q, i, a):
+    """``A[q:q+3, i] = a``."""
+    A[q, i], A[q + 1, i], A[q + 2, i] = a[0], a[1], a[2]
+
+
+@njit(cache=True)
 def rot(R, i, a):
     """``R[i] a`` of an ``(n, 3, 3)`` array of rotations."""
     return (R[i, 0, 0] * a[0] + R[i, 0, 1] * a[1] + R[i, 0, 2] * a[2],
