@@ -115,25 +115,25 @@ def unpack(flat, head):
 
 # ====================================================================== action
 @njit(cache=True, fastmath=FM, _nrt=False)
-def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, d):
-    """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2``. The points go through
-    three passes (``Theta, Theta_s``; the coefficients; the rotations and curvatures, in
-    ``d.pts``) rather than one: each point is a chain of dependent operations (sums, square
-    root, series, products), and short passes let the processor overlap many points
-    (the pendulum at 118 points: 2.5 us a call against 3.6 us in one pass, the same
-    results to the bit)."""
-    for j in range(c.shape[0]):
-        for q in range(3):
-            c2[j, q] = c[j, q] + u[0, j, q]
-            v2[j, q] = v[j, q] + u[2, j, q]
-            w2[j, q] = w[j, q] + u[3, j, q]
-    u1, P = u[1], d.pts
-    for i in range(R.shape[0]):
-        th, ts = window2(d.band, 0, 1, i, d.j0, u1, 0)
+def _windows2(B, j0, X, P):
+    """``P[0:3, i], P[3:6, i]``: the windows of basis matrices 0 and 1 at every point."""
+    for i in range(P.shape[1]):
+        th, ts = window2(B, 0, 1, i, j0, X, 0)
         put_col(P, 0, i, th)
         put_col(P, 3, i, ts)
-    for i in range(R.shape[0]):
-        put_col(P, 6, i, coef_ABC(norm(col(P, 0, i)), d.ser, d.thr))
+
+
+@njit(cache=True, fastmath=FM, _nrt=False)
+def _coefficients_ABC(ser, thr, P):
+    """``P[6:9, i]``: the coefficients ``A, B, C`` of ``Theta = P[0:3, i]`` at every point."""
+    for i in range(P.shape[1]):
+        put_col(P, 6, i, coef_ABC(norm(col(P, 0, i)), ser, thr))
+
+
+@njit(cache=True, fastmath=FM, _nrt=False)
+def _turn(R, K, R2, K2, P):
+    """``R2 = R exp(hat(Theta))``, ``K2 = exp(-Theta) K + J_r(Theta) Theta_s`` at every point
+    from ``P`` (:func:`_windows2`, :func:`_coefficients_ABC`)."""
     for i in range(R.shape[0]):
         th, cA, cB, cC = col(P, 0, i), P[6, i], P[7, i], P[8, i]
         E = exp_rows(cA, cB, th)
@@ -141,6 +141,22 @@ def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, d):
             r = (R[i, a, 0], R[i, a, 1], R[i, a, 2])
             R2[i, a, 0], R2[i, a, 1], R2[i, a, 2] = rows_T_times(E, r)
         put(K2, i, add(rows_T_times(E, row(K, i)), jr_times(cB, cC, th, col(P, 3, i))))
+
+
+@njit(cache=True, fastmath=FM, _nrt=False)
+def action(u, c, v, w, R, K, c2, v2, w2, R2, K2, d):
+    """``Lambda(u, y)`` into the preallocated ``c2, v2, w2, R2, K2``. The points go through
+    three passes (``Theta, Theta_s``; the coefficients; the rotations and curvatures, in
+    ``d.pts``) rather than one: each point is a chain of dependent operations (sums, square
+    root, series, products), and short passes let the processor overlap many points."""
+    for j in range(c.shape[0]):
+        for q in range(3):
+            c2[j, q] = c[j, q] + u[0, j, q]
+            v2[j, q] = v[j, q] + u[2, j, q]
+            w2[j, q] = w[j, q] + u[3, j, q]
+    _windows2(d.band, d.j0, u[1], d.pts)
+    _coefficients_ABC(d.ser, d.thr, d.pts)
+    _turn(R, K, R2, K2, d.pts)
 
 
 # ====================================================================== stage rates
