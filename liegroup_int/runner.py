@@ -469,16 +469,37 @@ def _run_scene(scene: Scene, out_dir: Path, quiet: bool = True, resume: dict | N
     return RunResult(out_dir, summary, outs.history)
 
 
+class _ShortSwitch:
+    """Python's thread switch interval at 0.1 ms while at least one preloading thread runs
+    (runs in several threads of one process share the setting), then back to what it was."""
+
+    lock, active, saved = threading.Lock(), 0, 0.005
+
+    @classmethod
+    def enter(cls) -> None:
+        with cls.lock:
+            if cls.active == 0:
+                cls.saved = sys.getswitchinterval()
+                sys.setswitchinterval(min(cls.saved, 1e-4))
+            cls.active += 1
+
+    @classmethod
+    def leave(cls) -> None:
+        with cls.lock:
+            cls.active -= 1
+            if cls.active == 0:
+                sys.setswitchinterval(cls.saved)
+
+
 def _preload_plots() -> threading.Thread:
     """A started daemon thread that prepares the plotting library (:func:`.io.plots.preload`)
     while the compiled loop integrates with the GIL released; :func:`_plots` joins it. While
-    it runs, Python's thread switch interval is 0.1 ms instead of 5: the loop returns to
+    it runs, the thread switch interval is short (:class:`_ShortSwitch`): the loop returns to
     Python at every output time and would otherwise wait up to 5 ms for the GIL each time.
     An error there is left to the plots themselves, which import the same modules."""
     from .io.plots import preload
 
-    interval = sys.getswitchinterval()
-    sys.setswitchinterval(min(interval, 1e-4))
+    _ShortSwitch.enter()
 
     def run():
         try:
@@ -486,7 +507,7 @@ def _preload_plots() -> threading.Thread:
         except Exception:  # noqa: BLE001 (the plots report it, in the main thread)
             pass
         finally:
-            sys.setswitchinterval(interval)
+            _ShortSwitch.leave()
 
     th = threading.Thread(target=run, name="preload-plots", daemon=True)
     th.start()

@@ -62,3 +62,18 @@ def test_preload_draws_a_figure_into_memory():
 
     plots.preload()
     assert "matplotlib.backends.backend_agg" in sys.modules and "matplotlib.ticker" in sys.modules
+
+
+def test_the_switch_interval_comes_back_after_overlapping_preloads():
+    """Runs in two threads of one process: the interval stays short while either preloads
+    and comes back to its value when both are done."""
+    from liegroup_int.runner import _ShortSwitch
+
+    before = sys.getswitchinterval()
+    _ShortSwitch.enter()
+    _ShortSwitch.enter()
+    short = sys.getswitchinterval()
+    _ShortSwitch.leave()
+    assert sys.getswitchinterval() == short == min(before, 1e-4)
+    _ShortSwitch.leave()
+    assert sys.getswitchinterval() == before
