@@ -264,7 +264,10 @@ def engine_args(cp, y) -> dict[str, tuple]:
     # the kernel, so that its compile unit holds their code
     data = tuple(x.fn if isinstance(x, FunctionValue) else x for x in cp.data)
     m = cp.increment_size(flat)
-    view = k.increment_view if k.increment_view is not None else (lambda data, a: a)
+    # the views and the new state from the kernels' Python functions: compiled for data that
+    # hold dispatchers, they would enter numba's disk cache with types that do not pickle
+    view = getattr(k.increment_view, "py_func", k.increment_view) or (lambda data, a: a)
     u, out = view(data, np.zeros(m)), view(data, np.zeros(m))
-    y_out = k.new_state(data, flat) if k.new_state is not None else np.empty_like(flat)
+    new_state = getattr(k.new_state, "py_func", k.new_state)
+    y_out = new_state(data, flat) if new_state is not None else np.empty_like(flat)
     return {"rate": (data, 0.0, flat, u, out), "action": (data, u, flat, y_out)}
