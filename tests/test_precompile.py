@@ -61,23 +61,24 @@ def test_the_split_set_covers_a_leapfrog_run_of_another_scene(scene_name):
 def test_the_leapfrog_reuses_the_stage_rate_s_compiled_copy():
     """The compiled leapfrog calls the Galerkin stage rate ``rates`` with its ``kin`` flag
     computed at run time, as the stage rate's entry does: numba keeps one compiled copy of
-    ``rates`` for both. A constant ``False`` there is typed as a literal and compiles a
+    ``rates`` for both. A constant there is typed as a literal and compiles a
     second copy (measured: ``compile beam_galerkin_split`` after the default sets 22.0 s
     against 14.9 s). Read from the signatures in numba's disk-cache index of ``rates``
     once both sets are warm (compiled now or by an earlier process from this source). The
-    flop model of ``benchmarks/stage_flops.py`` compiles a copy for a literal ``True`` on
-    purpose (it compiles the engine's rate with the entries inlined, to count their
-    instructions); only a literal ``False``, the leapfrog's, is looked for."""
+    flop model of ``benchmarks/stage_flops.py`` compiles a copy for a literal
+    ``KIN_COMPUTE`` on purpose (it compiles the engine's rate with the entries inlined, to
+    count their instructions); only a literal ``KIN_NONE``, the leapfrog's, is looked for."""
     from numba.core import types
 
     from liegroup_int.problems.beam.kernels import galerkin
+    from liegroup_int.problems.beam.kernels.adapters import KIN_NONE
 
     for name in ("beam_galerkin", "beam_galerkin_split"):
         ks = KERNEL_SETS[name]
         warm_scene(ks.scene, ks.overrides)
     sigs = [key[0] for key in galerkin.rates._cache._cache_file._load_index()]
     assert sigs, "rates has no entry in numba's disk cache"
-    assert not any(sig[-1] == types.literal(False) for sig in sigs), sigs
+    assert not any(sig[-1] == types.literal(KIN_NONE) for sig in sigs), sigs
 
 
 _PARTS_THEN_WARM = """

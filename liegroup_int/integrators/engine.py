@@ -232,6 +232,11 @@ class EngineKernels:
         ``watch(data, t, y) -> bool`` after every accepted step: ``True`` ends the call
         there (an event function changed sign, :meth:`CompiledStepper.watch`); ``None``:
         never.
+    staged_rate : numba dispatcher or None
+        ``staged_rate(data, t, y, u, out)``, the stage rate where ``y`` is the state that
+        ``action`` has just made from the same increment ``u`` with the same data (every
+        stage after the first): it may reuse what the action computed and left in the data;
+        ``None``: ``rate``.
     cache : bool
         Whether the engine's loops for these kernels are cached on disk (``False`` for
         kernels that call a user's function).
@@ -250,6 +255,7 @@ class EngineKernels:
     increment_view: Callable | None = None
     increment_views: Callable | None = None
     watch: Callable | None = None
+    staged_rate: Callable | None = None
     cache: bool = True
 
     @property
@@ -299,9 +305,10 @@ class CompiledProblem:
 
 
 # ====================================================================== the loops
-# Written once; ``engine_for`` compiles a copy per plugin with RATE, ACTION, ANGLE, SCALE,
-# END_STEP, FIELD, DEXPINV, NEW_STATE and COPY_STATE bound to its kernels.
+# Written once; ``engine_for`` compiles a copy per plugin with RATE, STAGED_RATE, ACTION,
+# ANGLE, SCALE, END_STEP, FIELD, DEXPINV, NEW_STATE and COPY_STATE bound to its kernels.
 RATE = ACTION = ANGLE = SCALE = END_STEP = FIELD = DEXPINV = NEW_STATE = COPY_STATE = INC_VIEW = INC_VIEWS = WATCH = None
+STAGED_RATE = None
 
 
 def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs):
@@ -330,8 +337,8 @@ def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, h
             f1 = Fv[1 - i0]
             qs[r] = FIELD(data, t + cc[r] * h, ys, f1)
             DEXPINV(data, uv, f1, Kv[r])
-        else:
-            qs[r] = RATE(data, t + cc[r] * h, ys, uv, Kv[r])
+        else:  # right after the action from the same increment
+            qs[r] = STAGED_RATE(data, t + cc[r] * h, ys, uv, Kv[r])
         evals += 1
     if fsal:
         COPY_STATE(data, ys, y1)
@@ -517,7 +524,7 @@ def _source_hash(kernels: EngineKernels) -> str:
     files = {p for p in Path(__file__).resolve().parents[1].rglob("*.py")}
     for k in (kernels.rate, kernels.action, kernels.angle, kernels.scale, kernels.end_step, kernels.field,
               kernels.dexpinv, kernels.new_state, kernels.copy_state, kernels.increment_view,
-              kernels.increment_views, kernels.watch):
+              kernels.increment_views, kernels.watch, kernels.staged_rate):
         if k is not None:
             files.add(Path(inspect.getfile(getattr(k, "py_func", k))).resolve())
     h = hashlib.sha1()
@@ -536,7 +543,8 @@ def engine_for(kernels: EngineKernels) -> Engine:
               END_STEP=kernels.end_step or no_end_step, FIELD=kernels.field or no_field,
               DEXPINV=kernels.dexpinv or no_dexpinv, NEW_STATE=kernels.new_state or flat_new_state,
               COPY_STATE=kernels.copy_state or flat_copy_state, INC_VIEW=kernels.increment_view or flat_view,
-              INC_VIEWS=kernels.increment_views or flat_view, WATCH=kernels.watch or no_watch)
+              INC_VIEWS=kernels.increment_views or flat_view, WATCH=kernels.watch or no_watch,
+              STAGED_RATE=kernels.staged_rate or kernels.rate)
     tag = f"{kernels.name}_{_source_hash(kernels)}" if kernels.cache else kernels.name
     for name, fn in _HELPERS + _TEMPLATES:
         copy = types.FunctionType(fn.__code__, ns, name, fn.__defaults__)

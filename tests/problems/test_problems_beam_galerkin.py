@@ -263,3 +263,31 @@ def test_rigid_motion_produces_no_strain(name):
     k_strained = pb.increment_rate(0.0, moved, pb.zero_increment(moved))
     print(f"{name}: rigid {np.abs(k[2:]).max():.3g}, strained {np.abs(k_strained[2:]).max():.3g}")
     assert np.abs(k[2:]).max() < 1e-9 * np.abs(k_strained[2:]).max()
+
+
+@pytest.mark.parametrize("name", ["pendulum", "t_frame", "sprung_payload", "spinning_helix"])
+def test_the_staged_rate_reads_what_the_action_left(name):
+    """The engine's stages after the first call the stage rate with ``KIN_FROM_ACTION``: it
+    takes ``Theta`` and its ``dexpinv`` coefficient at the points from the action that has
+    just made the state from the same increment. Its rate and power are those computed from
+    the increment, to the bit; after an action from another increment they are not (the
+    reason the engine calls it only right after the action)."""
+    from liegroup_int.problems.beam.kernels.adapters import KIN_COMPUTE, KIN_FROM_ACTION, c64
+
+    pb = galerkin(name, **{"integrator.backend": "numba"})
+    ks = pb._nb
+    y = pb.initial_state()
+    u = 1e-2 * np.random.default_rng(5).standard_normal((4, pb.n, 3))
+    rates = ks.kernels()[1]
+    ks._table.set(ks.data.loads, 0.1)
+
+    def rate(y2, kin):
+        out = np.empty((4, pb.n, 3))
+        return out, rates(*ks._state(y2), c64(u), out, ks.flat, ks.head, kin)
+
+    y2 = ks.action(u, y, type(y))
+    (k1, p1), (k2, p2) = rate(y2, KIN_COMPUTE), rate(y2, KIN_FROM_ACTION)
+    assert np.array_equal(k1, k2) and p1 == p2
+    ks.action(2.0 * u, y, type(y))
+    k3, _ = rate(y2, KIN_FROM_ACTION)
+    assert not np.array_equal(k1[1], k3[1])

@@ -41,6 +41,11 @@ from .profiles import set_loads
 #: basis windows, and the formulation's entries ``rates`` and ``action``.
 FLAT, HEAD, LOADS, ROWS, VECS, PROFILES, BAND, J0, RATES, ACTION = range(10)
 
+#: The Galerkin stage rate's ``kin``: without the rotational increment's rate (the
+#: leapfrog's kicks), with it from the increment, or with the values at the points that the
+#: action has just computed from the same increment (the engine's stages after the first).
+KIN_NONE, KIN_COMPUTE, KIN_FROM_ACTION = 0, 1, 2
+
 _HW = 5  # head entries per field: offset, then up to four dimensions
 
 #: Field annotations of the kernels' NamedTuples: float arrays of 1 to 4 dimensions, int
@@ -243,7 +248,15 @@ def engine_angle(data, u):
 @njit(cache=True, inline="always")
 def _rate5(data, t, y, u, out):
     set_loads(data[LOADS], data[ROWS], data[VECS], data[PROFILES], t)
-    return data[RATES](y[0], y[1], y[2], y[3], y[4], u, out, data[FLAT], data[HEAD], True)
+    return data[RATES](y[0], y[1], y[2], y[3], y[4], u, out, data[FLAT], data[HEAD], KIN_COMPUTE)
+
+
+@njit(cache=True, inline="always")
+def _staged_rate5(data, t, y, u, out):
+    """The stage rate right after the action from the same increment: the rotational
+    increment's values at the points are those the action left in the data."""
+    set_loads(data[LOADS], data[ROWS], data[VECS], data[PROFILES], t)
+    return data[RATES](y[0], y[1], y[2], y[3], y[4], u, out, data[FLAT], data[HEAD], KIN_FROM_ACTION)
 
 
 @njit(cache=True, inline="always")
@@ -275,7 +288,7 @@ def engine_kernels(name: str, fields: int) -> EngineKernels:
                                            6: (_rate6, _action6, _new_state6, _copy_state6)}[fields]
     return EngineKernels(name, rate, action, engine_angle, engine_scale, end_step=engine_end_step,
                          new_state=new_state, copy_state=copy_state, increment_view=engine_increment_view,
-                         increment_views=engine_increment_views)
+                         increment_views=engine_increment_views, staged_rate=_staged_rate5 if fields == 5 else None)
 
 
 def _function_types(fields: int, rate_args: tuple) -> tuple:
@@ -300,7 +313,7 @@ class KernelSet:
 
     data_cls: type = tuple
     fields: tuple[str, ...] = ()
-    rate_args: tuple = ()  # trailing arguments of the Python entry ``rates`` (Galerkin: ``kin = True``)
+    rate_args: tuple = ()  # trailing arguments of the Python entry ``rates`` (Galerkin: ``kin = KIN_COMPUTE``)
 
     def __init__(self, data, table, n: int):
         self._table, self.n = table, n
