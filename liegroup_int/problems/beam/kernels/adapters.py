@@ -284,11 +284,12 @@ def engine_kernels(name: str, fields: int) -> EngineKernels:
     first-class function values (:meth:`KernelSet.compiled_problem`). The loops are then
     compiled without the formulation's code (whose named data would make every loop
     compile for ~10 s), and the machine code they call is the one the Python side calls."""
-    rate, action, new_state, copy_state = {5: (_rate5, _action5, _new_state5, _copy_state5),
-                                           6: (_rate6, _action6, _new_state6, _copy_state6)}[fields]
+    rate, staged, action, new_state, copy_state = {
+        5: (_rate5, _staged_rate5, _action5, _new_state5, _copy_state5),
+        6: (_rate6, None, _action6, _new_state6, _copy_state6)}[fields]
     return EngineKernels(name, rate, action, engine_angle, engine_scale, end_step=engine_end_step,
                          new_state=new_state, copy_state=copy_state, increment_view=engine_increment_view,
-                         increment_views=engine_increment_views, staged_rate=_staged_rate5 if fields == 5 else None)
+                         increment_views=engine_increment_views, staged_rate=staged)
 
 
 def _function_types(fields: int, rate_args: tuple) -> tuple:

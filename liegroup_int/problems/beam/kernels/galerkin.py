@@ -517,7 +517,8 @@ def rates(c, v, w, R, K, u, out, d, kin):
     ``KIN_FROM_ACTION``): without it the rotational increment's rate ``out[1]`` is not
     formed (the leapfrog's kicks read the accelerations ``out[2], out[3]`` only); from the
     action's values, the state must be the one :func:`action` has just made from ``u`` with
-    these data (the engine's stages after the first: a stage 12 % cheaper at 118 points)."""
+    these data (the engine's stages after the first: the rate 7.0-7.4 us against 8.0-8.4 us
+    at 118 points)."""
     B, j0, u1 = d.band, d.j0, u[1]
     for j in range(v.shape[0]):
         for q in range(3):
