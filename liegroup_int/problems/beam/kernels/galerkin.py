@@ -617,15 +617,13 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
     u, acc, zero, scratch = tmp[0], tmp[1], tmp[2], tmp[3]
     u[:] = 0.0
     zero[:] = 0.0
-    m = y[1].shape[0]
+    m, ng = y[1].shape[0], gammas.shape[0]
     a, b = y, y2
     d = data[0]
-    _accelerations(data, t, a, zero, acc)
-    p0 = _synchronized_power(d, a, acc, scratch) if d.power else 0.0
-    evals, odd = 1, False
-    for _ in range(n):
-        for g in gammas:
-            hg = g * h
+    evals, odd, p0, hg, k = 0, False, 0.0, 0.0, -1
+    for _ in range(n * ng + 1):  # k = -1: the accelerations and power at the start
+        if k >= 0:
+            hg = gammas[k] * h
             _kick(a, acc, 0.5 * hg)
             for j in range(m):
                 for q in range(3):
@@ -633,14 +631,18 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
             action(u, a[0], a[1], a[2], a[3], a[4], b[0], b[1], b[2], b[3], b[4], d)
             a, b, odd = b, a, not odd
             t += hg
-            _accelerations(data, t, a, zero, acc)
-            evals += 1
+        _accelerations(data, t, a, zero, acc)
+        evals += 1
+        if k >= 0:
             _kick(a, acc, 0.5 * hg)
-            if d.power:
-                p1 = _synchronized_power(d, a, acc, scratch)
-                work[0] += 0.5 * hg * (p0 + p1)
-                p0 = p1
-        ad.engine_end_step(data, a)
+        if d.power:
+            p1 = _synchronized_power(d, a, acc, scratch)
+            work[0] += 0.5 * hg * (p0 + p1)  # hg = 0 at the start
+            p0 = p1
+        k += 1
+        if k == ng:
+            ad.engine_end_step(data, a)
+            k = 0
     if odd:  # an odd number of drifts: the result is in the work state
         ad._copy_state5(data, a, y)
     return evals
