@@ -1,15 +1,15 @@
 """Time order of RKMK2/3/4/6 on the paper's pendulum (p=4, n_ctrl=31).
 
 Errors are measured on the velocity control values at the final time, against RKMK6 at
-|lambda|max h = 0.05. Each method is fitted over three steps in its asymptotic range
-(docs/theory.md section 4): |lambda|max h <= 0.3, except RKMK6, whose error at
+|lambda|max h = 0.1 (see ``references``). Each method is fitted over three steps in its
+asymptotic range (docs/theory.md section 4): |lambda|max h <= 0.3, except RKMK6, whose error at
 h <= 0.3/|lambda| is below the velocity round-off floor (~2e-10: second derivatives of positions amplify the
 rounding of c); it is fitted at |lambda| h in [0.3, 0.6], where its weak growth
 (1.3e-3 y^8 per step) changes amplitudes by < 12% over the run. The explicit midpoint rule
 (growth y^4/8 per step) and Kutta's RK3 (damping y^4/24 per step) saturate the top modes
 over long runs, so they are fitted over 0.01 s; RKMK4 and RKMK6 over 0.1 s.
-RKMK2 is fitted at |lambda| h = 0.15..0.0375. Measured slopes: 2.08, 2.91, 4.02, 6.02
-(primal) and 1.79, 2.91, 3.88, 5.96 (Galerkin; RKMK4 and RKMK6 over 0.3 s, see
+RKMK2 is fitted at |lambda| h = 0.15..0.0375. Measured slopes: 2.08, 2.91, 4.02, 6.03
+(primal) and 2.03, 3.09, 3.87, 5.98 (Galerkin; RKMK4 and RKMK6 over 0.3 s, see
 GALERKIN_CASES).
 """
 
@@ -45,11 +45,18 @@ def pendulum(request):
 
 @pytest.fixture(scope="module")
 def references(pendulum):
+    """RKMK6 at |lambda| h = 0.1, one run with outputs at every fitted T. Its truncation error
+    is ~(0.1/0.3)^6 = 1.4e-3 of the smallest fitted error (RKMK6 at |lambda| h = 0.3). Measured:
+    it differs from RKMK6 at |lambda| h = 0.05 by 5.9e-11 .. 2.7e-10 (both formulations, all T),
+    the velocity round-off floor (RKMK6 at |lambda| h = 0.05 restarted at 0.01 s differs from
+    the unbroken run by up to 4e-10)."""
     pb, y0, lam = pendulum
-    refs = {T: integrate_fixed(pb, resolve_method("rkmk6"), (0.0, T), y0, 0.05 / lam)[1].v for T in (0.01, 0.1)}
-    if pb.formulation == "galerkin":  # RKMK6 at |lambda| h = 0.1 is 1e-11 from the finer reference
-        refs[0.3] = integrate_fixed(pb, resolve_method("rkmk6"), (0.0, 0.3), y0, 0.1 / lam)[1].v
-    return refs
+    Ts = (0.01, 0.1, 0.3) if pb.formulation == "galerkin" else (0.01, 0.1)
+    out = []  # (t, v) at t = 0 and at every T
+    integrate_fixed(pb, resolve_method("rkmk6"), (0.0, Ts[-1]), y0, 0.1 / lam, t_out=Ts,
+                    observer=lambda t, y: out.append((t, y.v.copy())))
+    assert np.allclose([t for t, _ in out], (0.0,) + Ts, rtol=0, atol=1e-12)
+    return {T: v for T, (_, v) in zip(Ts, out[1:])}
 
 
 @pytest.mark.parametrize("method", sorted(CASES))
