@@ -27,13 +27,17 @@ def test_work_of_a_dead_end_force_is_force_times_displacement(backend, formulati
     assert stats.quadrature == pytest.approx(exact, rel=1e-12)
 
 
-@pytest.mark.parametrize("backend", ["numpy", "numba"])
-def test_work_of_gravity_is_its_potential_drop(backend):
+@pytest.mark.parametrize("backend, t_end", [("numpy", 0.005), ("numba", 0.02)], ids=["numpy", "numba"])
+def test_work_of_gravity_is_its_potential_drop(backend, t_end):
+    """Adaptive RKMK45: one rejected step, steps growing to 1.4e-5 s. The NumPy backend runs
+    the first 5 ms (446 steps, a drop of 1.0e-4 J), the compiled one 20 ms (1777 steps,
+    1.6e-3 J); the quadrature matches the drop to 1.3e-15 relative (measured), 1e-12 is
+    the bound."""
     sc = load_scene("pendulum", {"integrator.backend": backend, "space.formulation": "primal"})
     pb = problem(sc)
     y0 = pb.initial_state()
     stats = Stats()
-    _, y, _ = integrate_adaptive(pb, resolve_method("rkmk45"), (0.0, 0.02), y0, rtol=1e-8, atol=1e-10,
+    _, y, _ = integrate_adaptive(pb, resolve_method("rkmk45"), (0.0, t_end), y0, rtol=1e-8, atol=1e-10,
                                  h_max=5e-5, stats=stats)
     drop = float(pb.q @ (pb.quad @ (pb.N0 @ (y.c - y0.c))))
     assert drop > 1e-5

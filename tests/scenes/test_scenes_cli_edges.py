@@ -106,26 +106,29 @@ def test_ctrl_c_during_a_study_keeps_the_finished_runs_and_a_rerun_continues(tmp
     import time
 
     out = tmp_path / "study"
-    # undamped pendulum runs (no dense spectrum at set-up) of 0.3 s to 2.5 s of CPU each: the
-    # signal lands inside the second one
+    # undamped pendulum runs (no dense spectrum at set-up) of 0.1 s, 1667 to 13,334 steps:
+    # measured 0.05 s to 0.35 s of integration each, 0.6 s for the last three, so the signal,
+    # sent within a 20 ms poll of the second run's start, lands before the study ends
     cmd = [sys.executable, "-m", "liegroup_int", "converge", "pendulum", "--param", "integrator.dt", "--values",
-           "6e-5", "3e-5", "1.5e-5", "7.5e-6", "--set", "t_end=0.3", "--set", "material.kelvin_voigt=0",
+           "6e-5", "3e-5", "1.5e-5", "7.5e-6", "--set", "t_end=0.1", "--set", "material.kelvin_voigt=0",
            "--set", "guard.spectrum=false", "--set", "output.hdf5=false",
            "--set", "output.plots=false", "--set", "output.paraview=false", "--serial", "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = out / "run_000" / "summary.json"  # "running" from the start, "ok" once finished
+    second = out / "run_001" / "summary.json"
 
-    def finished():
+    def status(path):
         try:
-            return json.loads(first.read_text())["status"] == "ok"
+            return json.loads(path.read_text())
         except (OSError, ValueError):
-            return False
+            return {}
 
+    # the signal goes once the second run has written its first checkpoint (its time loop
+    # is under way, with its signal handler); the first run is finished by then
     t0 = time.time()
-    while not finished() and time.time() - t0 < 120:
-        time.sleep(0.05)
-    assert finished(), p.communicate()
-    time.sleep(0.2)  # inside the second run
+    while status(second).get("checkpoint_t") is None and p.poll() is None and time.time() - t0 < 120:
+        time.sleep(0.02)
+    assert status(second).get("checkpoint_t") is not None and status(first).get("status") == "ok", p.communicate()
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=120)
     assert p.returncode == 130, err
