@@ -311,6 +311,20 @@ RATE = ACTION = ANGLE = SCALE = END_STEP = FIELD = DEXPINV = NEW_STATE = COPY_ST
 STAGED_RATE = None
 
 
+def _stage_rate(data, t, y, u, out, staged):
+    """The stage rate at ``(t, y)`` with increment ``u``; ``staged``: right after the action
+    that made ``y`` from ``u`` (:attr:`EngineKernels.staged_rate`)."""
+    if staged:
+        return STAGED_RATE(data, t, y, u, out)
+    return RATE(data, t, y, u, out)
+
+
+def _rate_only(data, t, y, u, out, staged):
+    """:func:`_stage_rate` of kernels without a staged rate: ``RATE`` at one call site, so
+    the loops compile the plugin's rate once."""
+    return RATE(data, t, y, u, out)
+
+
 def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, have_f0, q0, qs):
     """One RKMK step of size ``h`` from ``(t, y0)`` (``y0`` not written): stage rates into
     ``K``, total increment into ``u``, end state into ``y1``. ``Kv``, ``uv``, ``zv``
@@ -324,21 +338,20 @@ def _step(data, A, b, cc, fsal, y0, t, h, K, Kv, u, uv, zv, ys, y1, F, Fv, i0, h
     """
     s = b.shape[0]
     evals = 0
-    if have_f0:
-        copy_flat(F[i0], K[0])
-        qs[0] = q0
-    else:
-        qs[0] = RATE(data, t, y0, zv, Kv[0])
-        evals += 1
-    for r in range(1, s):
-        _combine(A[r], r, cc[r], K, h, u)
-        ACTION(data, uv, y0, ys)
+    for r in range(s):
+        if r == 0 and have_f0:
+            copy_flat(F[i0], K[0])
+            qs[0] = q0
+            continue
+        if r > 0:
+            _combine(A[r], r, cc[r], K, h, u)
+            ACTION(data, uv, y0, ys)
         if fsal and r == s - 1:
             f1 = Fv[1 - i0]
             qs[r] = FIELD(data, t + cc[r] * h, ys, f1)
             DEXPINV(data, uv, f1, Kv[r])
-        else:  # right after the action from the same increment
-            qs[r] = STAGED_RATE(data, t + cc[r] * h, ys, uv, Kv[r])
+        else:  # one call site: a plugin's rate is compiled into the loop once
+            qs[r] = _stage_rate(data, t + cc[r] * h, ys if r > 0 else y0, uv if r > 0 else zv, Kv[r], r > 0)
         evals += 1
     if fsal:
         COPY_STATE(data, ys, y1)
@@ -546,7 +559,8 @@ def engine_for(kernels: EngineKernels) -> Engine:
               INC_VIEWS=kernels.increment_views or flat_view, WATCH=kernels.watch or no_watch,
               STAGED_RATE=kernels.staged_rate or kernels.rate)
     tag = f"{kernels.name}_{_source_hash(kernels)}" if kernels.cache else kernels.name
-    for name, fn in _HELPERS + _TEMPLATES:
+    stage_rate = ("_stage_rate", _stage_rate if kernels.staged_rate is not None else _rate_only)
+    for name, fn in (stage_rate,) + _HELPERS + _TEMPLATES:
         copy = types.FunctionType(fn.__code__, ns, name, fn.__defaults__)
         copy.__qualname__ = f"{tag}.{name}"
         copy.__doc__ = fn.__doc__
