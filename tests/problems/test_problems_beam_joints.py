@@ -76,13 +76,15 @@ def test_straight_joint_converges_like_one_patch(formulation):
     """Two collinear 10 m patches of n control points each against one 20 m patch of
     2n - 1 (the same spacing), both against one patch of 81: a 20 m cantilever (the
     right-angle frame's section) under a tip force and torsion-bending couple pulse, tip
-    error over 0.5 s (steps of 4e-5 s, the reference 2e-5 s; the errors equal those at
-    2e-5 s to the digits shown, so they are the space errors). Measured (n = 11, 21),
-    Galerkin: one patch 1.7e-6, 1.1e-7; two patches 5.3e-6, 8.8e-8: the joint (a C^0 break
-    instead of C^3 continuity) costs 3.2x the error at n = 11, 0.82x at n = 21, and converges
-    faster than one patch (log2 of the error ratio 5.9). The reference's own
-    error, from the one-patch rate, is below 5 % of the smallest error measured."""
-    T, dt_ref, dt = 0.5, 2e-5, 4e-5
+    error over 0.5 s. Steps of 1e-4 s (RKMK4's stability limit is 1.6e-4 s on 41 control
+    points), the reference 5e-5 s (limit 7.6e-5 s on 81): the errors equal those with steps
+    of 2e-5 s to 6e-10 (0.5 % of the smallest), the reference to 5e-11, so they are the
+    space errors. Measured (n = 11, 21), Galerkin: one patch 4.1e-6, 1.1e-7; two patches
+    9.6e-6, 1.6e-7: the joint (a C^0 break instead of C^3 continuity) costs 2.4x the error
+    at n = 11, 1.5x at n = 21, and converges faster than one patch (log2 of the error ratio
+    5.9). The reference's own error, from the one-patch rate, is below 5 % of the smallest
+    error measured."""
+    T, dt_ref, dt = 0.5, 5e-5, 1e-4
     ref = _tips(CollocationSpace(straight(20, (1, 0, 0), 4, 81)), formulation, dt_ref, T)
     err = {}
     for n in (11, 21):

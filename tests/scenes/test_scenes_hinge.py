@@ -184,13 +184,14 @@ def test_hinge_spring_holds_the_tip_couple_at_rest():
     swing, inertia 0.34 kg m^2 about the hinge) bring the frame to rest, where statics
     says that member b carries C unchanged to the hinge: k phi = C (phi = 0.5 rad, a
     finite rotation), and the joint's couple on b is -C about z. Measured over 16-20 s
-    (h = 1e-4): |k phi - C| <= 8.5e-9 N m and the couple within 3.6e-6 N m of -C: what is
-    left are the undamped bending vibrations of the members (angular velocities ~1e-5
-    rad/s, through the damper c dphi/dt). Allowed 1e-6 C and 2e-5 C."""
+    (h = 2e-4, 0.68 of RKMK4's stability limit 2.9e-4 s; h = 1e-4 gives the same figures):
+    |k phi - C| <= 2.6e-8 N m and the couple within 2.5e-6 N m of -C: what is left are the
+    undamped bending vibrations of the members (angular velocities ~1e-5 rad/s, through the
+    damper c dphi/dt). Allowed 1e-6 C and 2e-5 C."""
     C = 0.5
     pb = _sprung(1.0, 1.2, **{"loads.end.couple": [0.0, 0.0, C], "loads.end.force": [0.0, 0.0, 0.0],
                               "loads.end.profile": "ramp", "loads.end.ramp": 2.0})
-    out = _run(pb, 20.0, 1e-4, n_out=11)
+    out = _run(pb, 20.0, 2e-4, n_out=11)
     for t, y in out[-3:]:
         phi = pb._hinge_springs(y)[0][0]
         assert abs(1.0 * phi - C) <= 1e-6 * C
@@ -210,13 +211,14 @@ def test_static_hinge_with_a_spring_against_the_rigid_bar_formula():
     stiffness S = 1e5 and 1e6 (EA = GA = EI = GJ = S): the angle's distance to the formula is
     the members' own flexibility, so it falls as 1 / S (measured 1.196e-4 and 1.196e-5: ratio
     10.0; asserted 9 to 11, and below 2e-5 at 1e6). The axes stay one line to round-off, and
-    the clamp's reaction balances the force to the Newton tolerance."""
+    the clamp's reaction balances the force to the Newton tolerance. Two load steps (13 and
+    24 Newton iterations; ten steps take 46 and 56 and give the same figures)."""
     from liegroup_int import solve_static
 
     errs = []
     for stiffness in (1e5, 1e6):
         pb = _two(spring=(20.0, 0.0), backend="numpy", **_stiff(stiffness), **{"loads.end.force": [0.0, 20.0, 0.0]})
-        res = solve_static(pb, load_steps=10)
+        res = solve_static(pb, load_steps=2)
         y = res.state
         errs.append(abs(pb._hinge_springs(y)[0][0] - 0.7390851332))
         na, nb = _axes(pb, y)
