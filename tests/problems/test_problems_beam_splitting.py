@@ -88,9 +88,9 @@ def test_strang_is_second_order_and_within_the_space_error_at_its_stable_step(pe
 def test_energy_error_over_ten_seconds(pendulum):
     """The undamped pendulum over 10 s, each method at its stable step (leapfrog |lambda| h =
     1.6, RKMK4 2.26, as ``dt = "auto"``). RKMK4 loses energy steadily (its damping of the top
-    modes): measured 1.03e-2 J at the end. The leapfrog's error follows the motion without
-    that loss: at most 3.77e-4 J, under 1e-3 of the largest kinetic energy (0.417 J at this
-    mesh), with 2.84x fewer rate evaluations (114000 against 324000). Asserted: the 1e-3
+    modes): measured 1.27e-2 J at the end. The leapfrog's error follows the motion without
+    that loss: at most 3.15e-4 J, under 1e-3 of the largest kinetic energy (0.417 J at this
+    mesh), with 2.84x fewer rate evaluations (110000 against 312000). Asserted: the 1e-3
     bound, and RKMK4's error at least 10x the leapfrog's."""
     pb, y0, lam, _ = pendulum
     E0 = pb.energy(y0, 0.0)

@@ -166,9 +166,11 @@ def test_converge_and_sweep_commands(tmp_path, capsys):
 
 def test_validate_spectrum_flags_a_spurious_growing_mode(capsys):
     # primal collocation of the cantilever at rest: p = 4, n_ctrl = 31 has a purely imaginary
-    # spectrum (measured max Re lambda 2.8e-8 1/s, FD noise, at |lambda|max 2.4e6); p = 8,
-    # n_ctrl = 61 has a spurious growing mode of +1.3e4 1/s (docs/verification.md), 650
-    # e-folds over 0.05 s
+    # spectrum (measured max Re lambda 2.5e-7 1/s, FD noise, at |lambda|max 2.4e6); p = 10,
+    # n_ctrl = 32 (384 unknowns) has a spurious growing mode of +1.52e4 1/s at |Im lambda| =
+    # 1.41e6 1/s, high in the spectrum (|lambda|max 4.5e6) like the +1.3e4 1/s mode of p = 8,
+    # n_ctrl = 61 in docs/verification.md: 760 e-folds over 0.05 s. "auto" removes it with
+    # tau = 2.05e-7 s, a damping ratio of 5.4e-6 on the first mode (auto accepts 1e-3)
     primal = ["--set", "space.formulation=primal"]
     assert main(["validate", "cantilever", "--spectrum", *primal]) == 0
     out, err = capsys.readouterr()
@@ -178,7 +180,7 @@ def test_validate_spectrum_flags_a_spurious_growing_mode(capsys):
     pb = problem(load_scene("cantilever", {"integrator.backend": "numpy", "space.formulation": "primal"}))
     lam_np = float(np.abs(eigenvalues(pb, 0.0, pb.initial_state())).max())
     assert lam_cli == pytest.approx(lam_np, rel=1e-3) and "stable dt rkmk4" in out and "warning" not in err
-    undamped = [*primal, "--set", "space.degree=8", "--set", "space.n_ctrl=61", "--set", "material.kelvin_voigt=0"]
+    undamped = [*primal, "--set", "space.degree=10", "--set", "space.n_ctrl=32", "--set", "material.kelvin_voigt=0"]
     assert main(["validate", "cantilever", "--spectrum", *undamped]) == 0
     out, err = capsys.readouterr()
     assert err.startswith("warning:") and "spurious" in err and err.count("\n") == 1
