@@ -54,7 +54,7 @@ from liegroup_int.bench.table import figure_dir, markdown, parser
 
 
 def _parse():
-    ap = parser(__doc__, quick_help="n_ctrl 31 and 41, one batch of >= 0.01 s, figure in a temporary directory")
+    ap = parser(__doc__, quick_help="n_ctrl 31 and 41, one batch of >= 0.002 s, figure in a temporary directory")
     ap.add_argument("--sizes", type=int, nargs="*", default=[31, 61, 121, 251, 501, 1001])
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--batch", type=float, default=0.15, help="minimum seconds per timed batch")
@@ -174,7 +174,7 @@ def main(args):
     CLOCK = time.perf_counter if args.wall else time.process_time
     sizes, out = args.sizes, figure_dir(args, "docs/img")
     if args.quick:
-        sizes, args.repeats, args.batch = [31, 41], 1, 0.01
+        sizes, args.repeats, args.batch = [31, 41], 1, 0.002
     print("# beam backends: cantilever p=4, RKMK4, fixed dt = 0.3e-6 (31/n)^2, smooth deformed start")
     print(f"# python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}, "
           f"{platform.machine()}, {os.cpu_count()} cpus, BLAS threads {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}")

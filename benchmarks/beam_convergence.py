@@ -594,7 +594,7 @@ def operator_frequencies(grid, f_ti) -> None:
 
 
 def frequency_study(quick: bool) -> dict:
-    T = 0.05 if quick else 0.5
+    T = 0.025 if quick else 0.5
     n_list = [11] if quick else [11, 21, 31]
     y_step = 2.0
     dt_out = 2.5e-4
@@ -602,7 +602,7 @@ def frequency_study(quick: bool) -> dict:
     C = pb0.constants
     EI, GA, rhoA, rhoI = C.CM[0], C.CN[0], C.mu, C.Jm[0]
     f_eb = BETA_L**2 / (2 * np.pi) * np.sqrt(EI / rhoA)
-    f_ti = timoshenko_frequencies(EI, GA, rhoA, rhoI, 1.0, f_eb[:3], grid=7 if quick else 41)
+    f_ti = timoshenko_frequencies(EI, GA, rhoA, rhoI, 1.0, f_eb[:3], grid=3 if quick else 41)
     emit(f"Section constants of the scene: EI = {EI:.6g} N m^2, GA = {GA:.6g} N (shear factor 1), "
          f"rhoA = {rhoA:.6g} kg/m, rhoI = {rhoI:.6g} kg m.")
     emit(f"Euler-Bernoulli f1..f3 = {', '.join(f'{f:.6f}' for f in f_eb[:3])} Hz; linear Timoshenko (same constants) "
@@ -664,6 +664,7 @@ SCENE_RUNS = {
     "spinning_helix": (1.0, 0.005, 0.0),
 }
 SCENE_RUNS_QUICK = {"pendulum": (0.01, 0.002, 0.0), "cantilever": (5e-4, 1e-4, 0.0)}
+SCENE_N_CTRL_QUICK = 11  # quick: every scene run on this mesh (and the doubled one), at the scene's dt
 
 
 class Recorder:
@@ -739,15 +740,16 @@ def scene_study(quick: bool) -> dict:
                      f"{r['cpu']:.1f}", f"{t_ref:g}", f"{r['ke']:.4g}", f"{r['drift']:.2e}", f"{r['orth']:.1e}",
                      fmt(r["hrel"], 2) if scene == "spinning_helix" else "-"])
 
+    mesh = {"space.n_ctrl": SCENE_N_CTRL_QUICK} if quick else {}
     for scene, (T, every, t_ref) in runs.items():
         sc = load_scene(scene)
         dt, method = sc.integrator.dt, sc.integrator.method
-        n0 = sc["space.n_ctrl"]
+        n0 = mesh.get("space.n_ctrl", sc["space.n_ctrl"])
         n2 = 2 * n0 - 1 if scene != "spinning_helix" else 2 * n0 - 2
-        ov0 = {"loads.end.t_off": 0.01} if (quick and scene == "arch") else {}
+        ov0 = {**mesh, **({"loads.end.t_off": 0.01} if (quick and scene == "arch") else {})}
         a, r = _scene_run(scene, ov0, T, every, dt, method, t_ref)
         out[scene] = a
-        add(scene, "scene settings", T, method, dt, t_ref, r)
+        add(scene, "scene settings" + (f", n_ctrl = {n0}" if mesh else ""), T, method, dt, t_ref, r)
         if scene != "arch":
             _, r = _scene_run(scene, {"space.n_ctrl": n2}, T, every, dt / 2, method, t_ref)
             add(scene, f"n_ctrl = {n2}, dt/2", T, method, dt / 2, t_ref, r)
@@ -759,6 +761,7 @@ def scene_study(quick: bool) -> dict:
         tr_c = 0.002 if scene == "arch" else t_ref
         if scene == "arch" and quick:
             ov_c, tr_c = {"loads.end.t_off": 0.0005}, 0.0005
+        ov_c = {**mesh, **ov_c}
         pre = ("short pulse, " if quick else "2 ms pulse, ") if scene == "arch" else "short span, "
         _, r = _scene_run(scene, ov_c, Tc, ev_c, dt, method, tr_c)
         add(scene, pre + "RKMK4 at the scene dt", Tc, method, dt, tr_c, r)

@@ -68,8 +68,8 @@ SETTINGS = {
     "cantilever": dict(T=0.05, every=2.5e-4, ref=(31, 1e-6), ladder=((21, 1e-6), (31, 1e-6), (61, 5e-7))),
 }
 QUICK = {
-    "pendulum": dict(T=0.3, every=1e-3, ref=(31, 5e-5), ladder=((21, 5e-5), (31, 5e-5))),
-    "cantilever": dict(T=0.01, every=2.5e-4, ref=(31, 1e-6), ladder=((21, 1e-6), (31, 1e-6))),
+    "pendulum": dict(T=0.2, every=1e-3, ref=(31, 5e-5), ladder=((21, 5e-5), (31, 5e-5))),
+    "cantilever": dict(T=0.005, every=2.5e-4, ref=(31, 1e-6), ladder=((21, 1e-6), (31, 1e-6))),
 }
 N_ELEMENTS = (25, 50, 100, 200, 400)
 N_ELEMENTS_QUICK = (25, 50, 100)

@@ -141,7 +141,7 @@ QUICK = {
     "ref_steps": 1000,
     "fixed": {"rkmk4": [100, 400], "rkmk6": [100, 250]},
     "adaptive": {"rkmk45": [1e-5, 1e-8], "rkmk65": [1e-4, 1e-7, 1e-10]},
-    "scipy": {"RK45": [1e-5, 1e-8], "DOP853": [1e-5, 1e-8, 1e-11], "DOP853-numpy": [1e-8]},
+    "scipy": {"RK45": [1e-5, 1e-8], "DOP853": [1e-5, 1e-8, 1e-11], "DOP853-numpy": [1e-5]},
     "min_time": 0.0,
     "repeats": 1,
 }

@@ -39,7 +39,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     repeats = 3
     if args.quick:
-        args.n_ctrl, repeats = [7, 9, 11], 1
+        args.n_ctrl, args.steps, repeats = [5, 7], 2, 1
     res = {n: measure(n, args.steps, repeats) for n in args.n_ctrl}
     finest = res[max(res)]["tip"]
     rows = [[n, ", ".join(f"{x:.4f}" for x in r["tip"]), f"{np.max(np.abs(r['tip'] - finest)):.2g}",
