@@ -637,7 +637,8 @@ def split_steps(data, y, y2, gammas, h, n, t, work, tmp):
             _kick(a, acc, 0.5 * hg)
         if d.power:
             p1 = _synchronized_power(d, a, acc, scratch)
-            work[0] += 0.5 * hg * (p0 + p1)  # hg = 0 at the start
+            if k >= 0:
+                work[0] += 0.5 * hg * (p0 + p1)
             p0 = p1
         k += 1
         if k == ng:
