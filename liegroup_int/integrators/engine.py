@@ -51,6 +51,7 @@ from typing import Callable
 import numpy as np
 from numba import njit
 from numba.core import types as nbtypes
+from numba.experimental import function_type as _function_type  # noqa: F401  (types a FunctionValue argument)
 
 from . import controller as _controller
 from .combine_numba import combine_into as _combine

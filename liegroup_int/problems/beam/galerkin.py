@@ -66,15 +66,12 @@ class GalerkinBeamState:
 
 
 class _SplitData(NamedTuple):
-    """What :meth:`GalerkinBeamProblem.split_steps` passes its compiled loop: the flat
-    kernel data (a private copy: the loop writes the stage loads into it), the load table
-    of :func:`.kernels.profiles.set_loads`, and work arrays."""
+    """What :meth:`GalerkinBeamProblem.split_steps` passes its compiled loop: the engine's
+    data (a private copy of the flat kernel data, which the loop writes the stage loads
+    into, the load table and the compiled entries), and work arrays."""
 
-    flat: np.ndarray
-    head: np.ndarray
-    rows: np.ndarray
-    vecs: np.ndarray
-    profiles: np.ndarray
+    data: tuple
+    entry: object  # call_split_steps compiled for these data's types (numba's entry point)
     work: tuple
     tmp: np.ndarray
 
@@ -862,26 +859,36 @@ class GalerkinBeamProblem(BeamBase):
                              "RKMK method for Kelvin-Voigt damping")
         sd = self.__dict__.get("_split_data") or self._split_setup()  # built once: a call per output time
         self._split_data = sd
-        from .kernels.galerkin import call_split_steps
-
         ys = tuple(np.array(a, dtype=float, order="C") for a in (y.c, y.v, y.w, y.R, y.K))
         w = np.zeros(1)
-        call_split_steps(sd.flat, sd.head, sd.rows, sd.vecs, sd.profiles, ys, sd.work, np.asarray(gammas, dtype=float),
-                         float(h), int(n), float(t), w, sd.tmp)
+        sd.entry(sd.data, ys, sd.work, np.ascontiguousarray(gammas, dtype=float), float(h), int(n), float(t), w, sd.tmp)
         if quadrature is not None:
             quadrature[0] += w[0]
         return self.state_cls(*ys)
 
     def _split_setup(self) -> "_SplitData":
-        """The compiled leapfrog's data: a private copy of the kernels' flat data, the load
-        table, and work arrays reused by every call."""
-        enc = self._nb._table.encoded() if self._nb is not None else None
-        if enc is None:
+        """The compiled leapfrog's data: the engine's (a private copy of the kernels' flat
+        data, the load table, the compiled entries), and work arrays reused by every call."""
+        cp = self._nb.compiled_problem(self.state_cls) if self._nb is not None else None
+        if cp is None:
             raise ValueError('splitting methods run the compiled kernels: use integrator.backend = "numba" and '
                              "load profiles the kernels evaluate (no Python callables)")
+        from ...integrators.engine import typed_entry
+        from .kernels.galerkin import call_split_steps
+
         y = self.initial_state()
         work = tuple(np.empty(np.shape(a)) for a in (y.c, y.v, y.w, y.R, y.K))
-        return _SplitData(self._nb.flat.copy(), self._nb.head, *enc, work=work, tmp=np.zeros((4, 4, self.n, 3)))
+        tmp, w = np.zeros((4, 4, self.n, 3)), np.zeros(1)
+        # the entry compiled for the data's function types: a plain call would type the
+        # first-class functions at every call (about 0.1 ms)
+        entry = typed_entry(call_split_steps, (cp.data, work, work, w, 0.0, 0, 0.0, w, tmp), dict(cp.functions))
+        return _SplitData(cp.data, entry, work=work, tmp=tmp)
+
+    def __getstate__(self):
+        """Pickled without the leapfrog's compiled entry (built again on first use)."""
+        state = dict(self.__dict__)
+        state.pop("_split_data", None)
+        return state
 
     # ------------------------------------------------------------------ reactions and power
     def _support_loads(self, t: float, y: GalerkinBeamState):
