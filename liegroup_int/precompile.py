@@ -5,8 +5,8 @@ Numba compiles a kernel the first time it is called and keeps the machine code i
 on-disk cache (``__pycache__`` next to the sources, or ``NUMBA_CACHE_DIR``): only the first
 run of a kind of problem pays for it. This module does that compilation up front, in
 separate processes side by side on a machine's cores: one per kernel set, and for a beam
-set one for its stage rate (about 17 s of the set's 30) and one for its action and the engine's
-loop, which calls the stage rate through its address and so compiles without it.
+set one for its stage rate (about 24 s of the set's 37 s of CPU) and one for its action and
+the engine's loop, which calls the stage rate through its address and so compiles without it.
 
 A kernel set is what one family of runs compiles: the beam's Galerkin formulation (the
 default), its primal collocation (opt-in), the rigid body, and the loops that run a user's
@@ -50,7 +50,7 @@ def _built(ks: KernelSet):
 
 def _part_rates(ks: KernelSet) -> None:
     """A beam formulation's stage rate: the entry the Python side and the engine's loops
-    call (the longest piece: about 17 s of the Galerkin set's 30)."""
+    call (the longest piece: about 24 s of the Galerkin set's 37 s of CPU)."""
     import numpy as np
 
     _, sim = _built(ks)
